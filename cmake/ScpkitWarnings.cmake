@@ -1,0 +1,10 @@
+# Warnings are errors for every scpkit target; sanitizers on request.
+add_library(scpkit_warnings INTERFACE)
+target_compile_options(scpkit_warnings INTERFACE
+  -Wall -Wextra -Wpedantic -Wshadow -Wconversion -Wno-sign-conversion
+  -Wnon-virtual-dtor -Wold-style-cast -Woverloaded-virtual -Werror)
+if(SCPKIT_SANITIZE)
+  target_compile_options(scpkit_warnings INTERFACE
+    -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer)
+  target_link_options(scpkit_warnings INTERFACE -fsanitize=address,undefined)
+endif()

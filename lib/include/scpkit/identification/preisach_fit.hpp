@@ -1,0 +1,85 @@
+#pragma once
+// Identification of a discretised Preisach operator from input/output samples
+// (paper 002 "identified efficiently as a linear least-squares optimization problem";
+// paper 000 Section 3 with MATLAB lsqnonneg).
+//
+//   minimise  1/N sum_t (c + sum_k w_k s_k(t) - y_t)^2
+//             + lambda / N_pairs * sum_{neighbour cells a,b} (L^2 (q_a - q_b))^2
+//   subject to  sign * w_k >= 0,  c free,
+//
+// with q = w / relative cell area (mass per full square) and s_k(t) the signed area fraction
+// of cell k. lambda = 0 is the papers' recipe. L and lambda are chosen by cross-validation
+// over blocks of the record (whole cycles or given segments, never random rows): each block is
+// predicted with the memory built from the *input* history, by a model fitted on the others.
+// Departures from the papers: the smoothness term and the cross-validated choice of L, see
+// docs/theory.md.
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "scpkit/hysteresis/preisach.hpp"
+#include "scpkit/identification/nnls.hpp"
+#include "scpkit/metrics.hpp"
+
+namespace scpkit {
+
+struct PreisachFitOptions {
+  int levels = 0;  ///< L; 0 = choose by cross-validation among candidate_levels
+  std::vector<int> candidate_levels = {6, 8, 10, 12, 15, 20, 25};
+  double smoothness = -1.0;  ///< lambda; < 0 = choose by cross-validation
+  std::vector<double> candidate_smoothness = {0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2};
+  int sign = 0;                ///< +1: densities >= 0; -1: <= 0 (falling response); 0: from data
+  std::optional<double> lo;    ///< lowest threshold; default: smallest input
+  std::optional<double> hi;    ///< highest threshold; default: largest input
+  int folds = 5;               ///< blocks for cross-validation when no block ids are given
+  NnlsOptions nnls;
+
+  /// False (with the reason) for impossible settings.
+  bool IsValid(std::string* why) const;
+};
+
+struct CrossValidationPoint {
+  int levels = 0;
+  double smoothness = 0.0;
+  double rms_pct_range = 0.0;  ///< pooled held-out RMS error, % of output range
+};
+
+struct PreisachFitSummary {
+  enum class Termination { kConverged, kNoConvergence };
+  Termination termination = Termination::kConverged;
+  int levels = 0;
+  double smoothness = 0.0;
+  int sign = 1;
+  int cells = 0;
+  int unexcited_cells = 0;      ///< cells whose signed area never changes in the data
+  int unidentified_directions = 0;  ///< cells + 1 minus the rank of the regressor
+  int nnls_iterations = 0;
+  double kkt_violation = 0.0;
+  int folds_used = 0;
+  std::vector<CrossValidationPoint> cross_validation;  ///< empty when L and lambda were given
+  double cv_rms_pct_range = -1.0;  ///< the chosen setting's held-out error; -1 if not run
+  ErrorMetrics train;              ///< on the identification data
+  std::vector<std::string> warnings;
+  std::string message;
+
+  std::string BriefReport() const;
+};
+
+struct PreisachFit {
+  PreisachModel model;
+  PreisachFitSummary summary;
+};
+
+/// Identifies a Preisach model. `blocks` (optional, one id per sample) names the segments used
+/// as cross-validation folds; empty means "split the record into whole cycles".
+/// Throws IdentificationError when the data cannot identify any model (too few samples, no
+/// input variation, non-finite values).
+PreisachFit fit_preisach(std::span<const double> input, std::span<const double> output,
+                         std::span<const int> blocks, const PreisachFitOptions& options);
+
+/// Blocks of whole cycles: cuts the record at input minima into `folds` contiguous parts with
+/// about equal sample counts. Exposed for diagnose and tests.
+std::vector<int> cycle_blocks(std::span<const double> input, int folds);
+
+}  // namespace scpkit

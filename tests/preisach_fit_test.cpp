@@ -1,0 +1,168 @@
+// Identification recovers known densities, reports what the data cannot identify, and its
+// cross-validation prefers the truth's resolution.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "scpkit/error.hpp"
+#include "scpkit/identification/preisach_fit.hpp"
+#include "test_support.hpp"
+
+namespace scpkit {
+namespace {
+
+// Damped oscillation between lo and hi with random minor loops: enough excitation for every
+// cell when the number of reversals exceeds L.
+std::vector<double> rich_input(std::mt19937& rng, double lo, double hi, int cycles, int per_half) {
+  std::vector<double> u;
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  double prev = lo;
+  for (int c = 0; c < cycles; ++c) {
+    const double amp = 1.0 - static_cast<double>(c) / cycles;
+    const double top = lo + (hi - lo) * (0.5 + 0.5 * amp) * (c % 3 == 2 ? U(rng) : 1.0);
+    const double bottom = lo + (hi - lo) * 0.5 * (1.0 - amp) * (c % 4 == 3 ? U(rng) : 1.0);
+    for (double target : {top, bottom}) {
+      for (int k = 1; k <= per_half; ++k) u.push_back(prev + (target - prev) * k / per_half);
+      prev = target;
+    }
+  }
+  return u;
+}
+
+TEST(PreisachFit, RecoversAKnownDensityFromNoiseFreeData) {
+  std::mt19937 rng(31);
+  for (int L : {4, 6, 8}) {
+    const PreisachGrid grid{0.0, 1.0, L};
+    const PreisachModel truth = testing::random_model(rng, grid);
+    const auto u = rich_input(rng, 0.0, 1.0, 40, 7);
+    PreisachState s = PreisachState::negative_saturation(grid);
+    const Eigen::VectorXd y = truth.simulate(s, u);
+    PreisachFitOptions opt;
+    opt.levels = L;
+    opt.smoothness = 0.0;
+    opt.lo = 0.0;
+    opt.hi = 1.0;
+    const PreisachFit fit = fit_preisach(u, std::span<const double>(y.data(), y.size()), {}, opt);
+    EXPECT_EQ(fit.summary.termination, PreisachFitSummary::Termination::kConverged);
+    EXPECT_EQ(fit.summary.unexcited_cells, 0) << "L " << L;
+    EXPECT_LT((fit.model.weights() - truth.weights()).cwiseAbs().maxCoeff(), 1e-6) << "L " << L;
+    EXPECT_NEAR(fit.model.bias(), truth.bias(), 1e-6);
+    EXPECT_LT(fit.summary.kkt_violation, 1e4);
+  }
+}
+
+TEST(PreisachFit, FallingResponseGetsNonPositiveDensities) {
+  std::mt19937 rng(32);
+  const PreisachGrid grid{0.0, 10.0, 6};
+  const PreisachModel up = testing::random_model(rng, grid);
+  const PreisachModel truth = up.with_output_affine(-1.0, 0.0);
+  const auto u = rich_input(rng, 0.0, 10.0, 30, 5);
+  PreisachState s = PreisachState::negative_saturation(grid);
+  const Eigen::VectorXd y = truth.simulate(s, u);
+  PreisachFitOptions opt;
+  opt.levels = 6;
+  opt.smoothness = 0.0;
+  const PreisachFit fit = fit_preisach(u, std::span<const double>(y.data(), y.size()), {}, opt);
+  EXPECT_EQ(fit.summary.sign, -1);
+  EXPECT_LE(fit.model.weights().maxCoeff(), 0.0);
+  EXPECT_LT(fit.summary.train.rms_pct_range, 1e-6);
+}
+
+TEST(PreisachFit, CrossValidationBeatsTheUnregularisedFineGridOnNoisyData) {
+  std::mt19937 rng(33);
+  const PreisachGrid grid{0.0, 1.0, 30};
+  // A smooth density (Gaussian bump near the diagonal), sampled finely: the truth.
+  Eigen::VectorXd w(grid.cells());
+  for (int i = 0; i < grid.levels; ++i) {
+    for (int j = i; j < grid.levels; ++j) {
+      const double b = (i + 0.5) / grid.levels, a = (j + 0.5) / grid.levels;
+      w[grid.cell_index(i, j)] = PreisachGrid::relative_area(i, j) *
+                                 std::exp(-std::pow((a - b - 0.2) / 0.15, 2) -
+                                          std::pow((a + b - 1.0) / 0.5, 2));
+    }
+  }
+  const PreisachModel truth(grid, w / w.sum(), 0.0);
+  const auto u = rich_input(rng, 0.0, 1.0, 30, 8);
+  PreisachState s = PreisachState::negative_saturation(grid);
+  Eigen::VectorXd y = truth.simulate(s, u);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  for (Eigen::Index t = 0; t < y.size(); ++t) y[t] += noise(rng);
+  const std::span<const double> ys(y.data(), y.size());
+
+  PreisachFitOptions automatic;  // L and smoothness by cross-validation
+  const PreisachFit fit = fit_preisach(u, ys, {}, automatic);
+  ASSERT_FALSE(fit.summary.cross_validation.empty());
+  double raw_fine = 0.0;  // the unregularised finest candidate's held-out error
+  for (const auto& p : fit.summary.cross_validation) {
+    if (p.levels == 20 && p.smoothness == 0.0) raw_fine = p.rms_pct_range;
+  }
+  ASSERT_GT(raw_fine, 0.0);
+  EXPECT_LT(fit.summary.cv_rms_pct_range, raw_fine);
+  // The chosen model predicts the noise-free truth better than the noise level.
+  PreisachState a = PreisachState::negative_saturation(truth.grid());
+  PreisachState b = PreisachState::negative_saturation(fit.model.grid());
+  double worst = 0.0;
+  for (double v : rich_input(rng, 0.0, 1.0, 10, 5)) {
+    worst = std::max(worst, std::abs(truth.step(a, v) - fit.model.step(b, v)));
+  }
+  EXPECT_LT(worst, 0.03);
+}
+
+TEST(PreisachFit, ReportsUnexcitedCellsAndRefusesUnidentifiableData) {
+  std::mt19937 rng(34);
+  const PreisachGrid grid{0.0, 1.0, 8};
+  const PreisachModel truth = testing::random_model(rng, grid);
+  // Reversals only inside [0.6, 0.85]: the cells below 0.6 switch together (dependent
+  // columns) and the 8 cells with alpha above 0.875 never switch at all (hi is 1).
+  std::vector<double> u;
+  for (int c = 0; c < 10; ++c) {
+    for (double v : {0.85, 0.6, 0.8, 0.7}) u.push_back(v);
+  }
+  u.insert(u.begin(), 0.0);
+  PreisachState s = PreisachState::negative_saturation(grid);
+  const Eigen::VectorXd y = truth.simulate(s, u);
+  PreisachFitOptions opt;
+  opt.levels = 8;
+  opt.smoothness = 0.0;
+  opt.lo = 0.0;
+  opt.hi = 1.0;
+  const PreisachFit fit = fit_preisach(u, std::span<const double>(y.data(), y.size()), {}, opt);
+  EXPECT_EQ(fit.summary.unexcited_cells, 8);
+  EXPECT_GT(fit.summary.unidentified_directions, 10);
+  ASSERT_EQ(fit.summary.warnings.size(), 2u);
+  EXPECT_NE(fit.summary.warnings[0].find("never switch"), std::string::npos);
+  EXPECT_NE(fit.summary.warnings[1].find("identify only"), std::string::npos);
+
+  const std::vector<double> few = {0.0, 1.0, 0.5};
+  EXPECT_THROW_MSG(fit_preisach(few, few, {}, opt), IdentificationError, "too few");
+  const std::vector<double> flat(20, 3.0), resp(20, 1.0);
+  std::vector<double> resp2 = resp;
+  resp2[3] = 2.0;
+  EXPECT_THROW_MSG(fit_preisach(flat, resp2, {}, opt), IdentificationError, "never changes");
+  PreisachFitOptions bad;
+  bad.folds = 1;
+  std::string why;
+  EXPECT_FALSE(bad.IsValid(&why));
+  EXPECT_NE(why.find("folds"), std::string::npos);
+}
+
+TEST(PreisachFit, CycleBlocksAreContiguousWholeCycles) {
+  std::vector<double> u;
+  for (int c = 0; c < 10; ++c) {
+    for (int k = 0; k < 10; ++k) u.push_back(std::abs(k - 5.0));
+  }
+  const auto b = cycle_blocks(u, 5);
+  ASSERT_EQ(b.size(), u.size());
+  EXPECT_EQ(b.front(), 0);
+  EXPECT_EQ(b.back(), 4);
+  for (std::size_t t = 1; t < b.size(); ++t) {
+    ASSERT_GE(b[t], b[t - 1]);
+    if (b[t] != b[t - 1]) {
+      EXPECT_LT(u[t], u[t - 1]);  // cut at a local minimum
+    }
+  }
+}
+
+}  // namespace
+}  // namespace scpkit
