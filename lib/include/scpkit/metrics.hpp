@@ -17,6 +17,14 @@ struct ErrorMetrics {
   double range = 0.0;  ///< P, in the response's units
   int count = 0;
   std::string brief(const std::string& unit) const;
+  /// The same errors with the response in other units (e.g. 100 for strain -> strain-%).
+  ErrorMetrics scaled(double factor) const {
+    ErrorMetrics m = *this;
+    m.mean_abs *= factor;
+    m.sd_abs *= factor;
+    m.range *= factor;
+    return m;
+  }
 };
 
 /// Throws InvalidArgument when sizes differ or fewer than 2 samples are given.

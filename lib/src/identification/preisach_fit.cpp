@@ -312,9 +312,10 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
 std::string PreisachFitSummary::BriefReport() const {
   std::string s = fmt::format(
       "Preisach fit: L = {} ({} cells, {} unexcited), smoothness {:g}, sign {:+d}, {}\n"
-      "  identification: {}",
+      "  identification: E_max {:.3f} %, E_RMS {:.3f} % of the response range",
       levels, cells, unexcited_cells, smoothness, sign,
-      termination == Termination::kConverged ? "converged" : "NOT converged", train.brief(""));
+      termination == Termination::kConverged ? "converged" : "NOT converged", train.max_pct_range,
+      train.rms_pct_range);
   if (cv_rms_pct_range >= 0.0) {
     s += fmt::format("\n  cross-validated over {} blocks: held-out E_RMS {:.3f} % of range",
                      folds_used, cv_rms_pct_range);

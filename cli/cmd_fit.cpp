@@ -1,0 +1,185 @@
+// scpkit fit DATA.csv: identify a Preisach model (and, for paired thread/SCP data, the SCP gain).
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <iostream>
+
+#include "commands.hpp"
+#include "common.hpp"
+#include "scpkit/identification/preisach_fit.hpp"
+#include "scpkit/io/model_file.hpp"
+#include "scpkit/mechanics/ply_mapping.hpp"
+
+namespace scpkit::cli {
+namespace {
+
+constexpr const char* kUsage = "scpkit fit DATA.csv [--model preisach] [-o MODEL.json] [options]";
+constexpr const char* kAbout =
+    "Identifies a Preisach hysteresis model from a measurement file (docs/data-format.md):\n"
+    "input = the one varying column of load_g/load_mN/load_N, voltage_V, power_W, temp_C;\n"
+    "response = strain, strain_pct, or disp_mm (strain when length_mm metadata is given).\n"
+    "A paired file (thread_strain_pct and scp_strain_pct) fits the thread model and the\n"
+    "SCP/thread gain. By default the number of levels L and the smoothness are chosen by\n"
+    "cross-validation on held-out blocks (the `segment` column, else whole cycles).\n"
+    "Writes the model as JSON and prints the identification errors (E_max, E_RMS in % of\n"
+    "the response range; mean |e| and its sigma in the response's units).";
+
+std::optional<CoilGeometry> coil_from_metadata(const Measurement& m) {
+  const auto d = m.meta_number("coil_d_mm"), D = m.meta_number("coil_D_mm"), n = m.meta_number("coil_n");
+  if (!d && !D && !n) return std::nullopt;
+  if (!d || !D || !n) {
+    throw InputError(m.source(), 0, 0, "coil metadata needs all of coil_d_mm, coil_D_mm and coil_n");
+  }
+  CoilGeometry c;
+  c.wire_d_m = *d * 1e-3;
+  c.mean_D_m = *D * 1e-3;
+  c.coils = *n;
+  c.legs = m.meta_positive_int("legs").value_or(1);
+  try {
+    c.validate();
+  } catch (const InvalidArgument& e) {
+    throw InputError(m.source(), 0, 0, std::string("coil metadata: ") + e.what());
+  }
+  return c;
+}
+
+}  // namespace
+
+int run_fit(const std::vector<std::string>& args) {
+  po::options_description opt("options");
+  opt.add_options()("help,h", "show this help")(
+      "model", po::value<std::string>()->default_value("preisach"),
+      "model: preisach (gpi, linear, poly2, lonely: not in this version)")(
+      "output,o", po::value<std::string>(), "model file to write (default: DATA stem + .model.json)")(
+      "input", po::value<std::string>()->default_value(""),
+      "input quantity when several vary: load, voltage, power, temp")(
+      "response", po::value<std::string>()->default_value(""),
+      "response: strain, disp_mm, thread or scp (paired files default to thread)")(
+      "levels,L", po::value<int>()->default_value(0), "Preisach levels L (0: cross-validate)")(
+      "smoothness", po::value<double>()->default_value(-1.0),
+      "smoothness weight lambda >= 0 (negative: cross-validate)")(
+      "sign", po::value<std::string>()->default_value("auto"),
+      "density sign: +1 (rising response), -1 (falling), auto")(
+      "lo", po::value<double>(), "lowest threshold, in the input column's units (default: data min)")(
+      "hi", po::value<double>(), "highest threshold, in the input column's units (default: data max)")(
+      "folds", po::value<int>()->default_value(5), "cross-validation blocks without a segment column")(
+      "json", "print one JSON object instead of the report");
+  po::variables_map vm;
+  if (!parse_command_line(args, kUsage, kAbout, opt, {"DATA"}, vm)) return kOk;
+
+  const std::string model_kind = vm["model"].as<std::string>();
+  if (model_kind != "preisach") {
+    if (model_kind == "gpi" || model_kind == "linear" || model_kind == "poly2" || model_kind == "lonely") {
+      throw UsageError(fmt::format("model '{}' is not available in this version of scpkit (only preisach)", model_kind));
+    }
+    throw UsageError(fmt::format("unknown model '{}' (preisach, gpi, linear, poly2, lonely)", model_kind));
+  }
+  const std::string data_path = vm["DATA"].as<std::string>();
+  const Measurement m = Measurement::read(data_path);
+  const Signal in = select_input(m, vm["input"].as<std::string>());
+  const bool paired = m.find(Quantity::kThreadStrain) && m.find(Quantity::kScpStrain);
+  std::string response_choice = vm["response"].as<std::string>();
+  if (response_choice.empty() && paired) response_choice = "thread";
+  const Signal out = select_response(m, response_choice);
+
+  PreisachFitOptions fo;
+  fo.levels = vm["levels"].as<int>();
+  fo.smoothness = vm["smoothness"].as<double>();
+  fo.folds = vm["folds"].as<int>();
+  const std::string sign = vm["sign"].as<std::string>();
+  if (sign == "auto") {
+    fo.sign = 0;
+  } else if (sign == "+1" || sign == "1") {
+    fo.sign = 1;
+  } else if (sign == "-1") {
+    fo.sign = -1;
+  } else {
+    throw UsageError("--sign must be +1, -1 or auto");
+  }
+  double in_factor = 1.0;
+  for (const auto& c : m.columns()) {
+    if (c.name == in.column) in_factor = c.to_canonical;
+  }
+  if (vm.count("lo")) fo.lo = vm["lo"].as<double>() * in_factor;
+  if (vm.count("hi")) fo.hi = vm["hi"].as<double>() * in_factor;
+  std::string why;
+  if (!fo.IsValid(&why)) throw UsageError(why);
+
+  std::vector<int> blocks;
+  if (const MeasurementColumn* seg = m.find(Quantity::kSegment)) {
+    for (double v : seg->values) blocks.push_back(static_cast<int>(v));
+  }
+  PreisachFit fit = [&] {
+    try {
+      return fit_preisach(in.values, out.values, blocks, fo);
+    } catch (const IdentificationError& e) {
+      rethrow_at_column(m, out.column, std::string("cannot identify the model: ") + e.what());
+    }
+  }();
+
+  ModelFile mf;
+  mf.input = in.name;
+  mf.response = out.name;
+  mf.response_column = out.column;
+  mf.preisach = fit.model;
+  mf.specimen.specimen = m.meta("specimen").value_or("");
+  mf.specimen.material = m.meta("material").value_or("");
+  mf.specimen.plies = m.meta_positive_int("plies").value_or(0);
+  mf.specimen.length_mm = m.meta_number("length_mm").value_or(0.0);
+  mf.specimen.coil = coil_from_metadata(m);
+  const double scale = display_scale(out.name);
+  mf.fit_metrics = fit.summary.train.scaled(scale);
+  mf.cv_rms_pct_range = fit.summary.cv_rms_pct_range;
+  mf.data_file = data_path;
+  if (paired) {
+    try {
+      mf.scp_gain = fit_scp_gain(m.find(Quantity::kThreadStrain)->values, m.find(Quantity::kScpStrain)->values);
+    } catch (const IdentificationError& e) {
+      rethrow_at_column(m, m.find(Quantity::kScpStrain)->name, e.what());
+    }
+  }
+  const std::string model_path =
+      vm.count("output") ? vm["output"].as<std::string>()
+                         : std::filesystem::path(data_path).stem().string() + ".model.json";
+  save_model(model_path, mf);
+
+  const std::string unit = display_unit(out.name);
+  if (vm.count("json")) {
+    nlohmann::json j = metrics_json(mf.fit_metrics);
+    j["model_file"] = model_path;
+    j["model"] = "preisach";
+    j["input"] = in.name;
+    j["response"] = out.name;
+    j["response_unit"] = unit;
+    j["levels"] = fit.summary.levels;
+    j["smoothness"] = fit.summary.smoothness;
+    j["sign"] = fit.summary.sign;
+    j["unexcited_cells"] = fit.summary.unexcited_cells;
+    j["unidentified_directions"] = fit.summary.unidentified_directions;
+    j["cv_rms_pct_range"] = fit.summary.cv_rms_pct_range;
+    j["converged"] = fit.summary.termination == PreisachFitSummary::Termination::kConverged;
+    j["warnings"] = fit.summary.warnings;
+    nlohmann::json cv = nlohmann::json::array();
+    for (const auto& p : fit.summary.cross_validation) {
+      cv.push_back({{"levels", p.levels}, {"smoothness", p.smoothness}, {"rms_pct_range", p.rms_pct_range}});
+    }
+    j["cross_validation"] = cv;
+    if (mf.scp_gain) {
+      j["scp_gain"] = {{"gain", mf.scp_gain->gain}, {"offset_pct", 100.0 * mf.scp_gain->offset}, {"r2", mf.scp_gain->r2}};
+    }
+    print_json(j);
+  } else {
+    std::cout << fmt::format("{}: {} rows, input {} ({}), response {} ({})\n", data_path, m.rows(),
+                             in.column, display_unit(in.name), out.column, unit);
+    std::cout << fit.summary.BriefReport() << "\n";
+    std::cout << fmt::format("  errors: {}\n", mf.fit_metrics.brief(unit));
+    if (mf.scp_gain) {
+      std::cout << fmt::format("  SCP gain: scp = {:.4f} * thread {:+.4f} strain-%  (R^2 {:.5f}, {} pairs)\n",
+                               mf.scp_gain->gain, 100.0 * mf.scp_gain->offset, mf.scp_gain->r2, mf.scp_gain->samples);
+    }
+    std::cout << "model written to " << model_path << "\n";
+  }
+  return kOk;
+}
+
+}  // namespace scpkit::cli

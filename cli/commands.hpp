@@ -1,0 +1,12 @@
+#pragma once
+#include <string>
+#include <vector>
+
+namespace scpkit::cli {
+
+int run_fit(const std::vector<std::string>& args);
+int run_predict(const std::vector<std::string>& args);
+int run_map(const std::vector<std::string>& args);
+int run_simulate(const std::vector<std::string>& args);
+
+}  // namespace scpkit::cli

@@ -1,0 +1,62 @@
+#include "common.hpp"
+
+#include <fmt/format.h>
+
+#include <iostream>
+
+namespace scpkit::cli {
+
+bool parse_command_line(const std::vector<std::string>& args, const char* usage,
+                        const char* description, po::options_description& visible,
+                        const std::vector<std::string>& positional_names, po::variables_map& vm) {
+  po::options_description all;
+  all.add(visible);
+  po::options_description hidden;
+  po::positional_options_description pos;
+  for (const auto& name : positional_names) {
+    hidden.add_options()(name.c_str(), po::value<std::string>());
+    pos.add(name.c_str(), 1);
+  }
+  all.add(hidden);
+  try {
+    po::store(po::command_line_parser(args).options(all).positional(pos).run(), vm);
+    if (vm.count("help")) {
+      std::cout << "usage: " << usage << "\n\n" << description << "\n\n" << visible << "\n";
+      return false;
+    }
+    po::notify(vm);
+  } catch (const po::error& e) {
+    throw UsageError(e.what());
+  }
+  for (const auto& name : positional_names) {
+    if (!vm.count(name)) throw UsageError(fmt::format("missing {} (usage: {})", name, usage));
+  }
+  return true;
+}
+
+nlohmann::json metrics_json(const ErrorMetrics& m) {
+  return {{"rms_pct_range", m.rms_pct_range}, {"max_pct_range", m.max_pct_range},
+          {"mean_abs", m.mean_abs},           {"sd_abs", m.sd_abs},
+          {"range", m.range},                 {"count", m.count}};
+}
+
+void print_json(const nlohmann::json& j) { std::cout << j.dump(2) << std::endl; }
+
+double to_column_units(double canonical, const MeasurementColumn& column, double length_mm,
+                       const std::string& canonical_name) {
+  if (canonical_name == "strain" && column.quantity == Quantity::kDisplacement) {
+    return canonical * length_mm / column.to_canonical;
+  }
+  return canonical / column.to_canonical;
+}
+
+std::string csv_number(double v) { return fmt::format("{:.8g}", v); }
+
+void rethrow_at_column(const Measurement& m, const std::string& column, const std::string& message) {
+  for (const auto& c : m.columns()) {
+    if (c.name == column) m.fail_at_column(c, message);
+  }
+  throw InputError(m.source(), m.header_line(), 0, message);
+}
+
+}  // namespace scpkit::cli

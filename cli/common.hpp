@@ -1,0 +1,61 @@
+#pragma once
+// Shared pieces of the scpkit subcommands: option parsing, exit codes, output.
+#include <boost/program_options.hpp>
+#include <nlohmann/json.hpp>
+
+#include <string>
+#include <vector>
+
+#include "scpkit/error.hpp"
+#include "scpkit/io/measurement.hpp"
+#include "scpkit/metrics.hpp"
+
+namespace scpkit::cli {
+
+namespace po = boost::program_options;
+
+/// Exit codes (docs/cli.md).
+enum ExitCode : int {
+  kOk = 0,
+  kInternalError = 1,
+  kUsageError = 2,
+  kInputError = 3,  ///< bad or unusable input data (file:line:column on stderr)
+};
+
+/// A command-line mistake: printed with a hint to --help, exit code 2.
+class UsageError : public Error {
+ public:
+  using Error::Error;
+};
+
+struct Command {
+  const char* name;
+  const char* summary;
+  int (*run)(const std::vector<std::string>& args);
+};
+
+/// Parses `args` against `visible` options plus positionals. Returns false when --help was
+/// printed. Throws UsageError on unknown options or missing positionals.
+bool parse_command_line(const std::vector<std::string>& args, const char* usage,
+                        const char* description, po::options_description& visible,
+                        const std::vector<std::string>& positional_names, po::variables_map& vm);
+
+/// Metrics as JSON fields (rms_pct_range, max_pct_range, mean_abs, sd_abs, range, count).
+nlohmann::json metrics_json(const ErrorMetrics& m);
+
+/// Prints exactly one JSON object on stdout.
+void print_json(const nlohmann::json& j);
+
+/// Converts a canonical response value to the units of the column it came from
+/// (strain fraction -> the column's strain unit, or mm via length_mm).
+double to_column_units(double canonical, const MeasurementColumn& column, double length_mm,
+                       const std::string& canonical_name);
+
+/// "12.34" style number for CSV output.
+std::string csv_number(double v);
+
+/// IdentificationError -> InputError located at a column of the data file.
+[[noreturn]] void rethrow_at_column(const Measurement& m, const std::string& column,
+                                    const std::string& message);
+
+}  // namespace scpkit::cli

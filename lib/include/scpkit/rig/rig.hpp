@@ -1,0 +1,88 @@
+#pragma once
+// The virtual test rig: a ground-truth thread material, a ply count, a coil, a load protocol,
+// a sensor and chosen non-ideal effects, producing a measurement file in the SPEC format with
+// the truth in its metadata. Used by the examples, the tests, and users planning experiments.
+//
+// Ground truth (docs/rig.md):
+//   thread, q plies:  eps_thr,q[F] = Gamma*[F / q]        (Gamma* a fine Preisach operator
+//                                                          over the per-ply load, slope 1/(E A))
+//   SCP:              eps_SCP,q = g_q eps_thr,q + c,  g_q = K_thr,q / K_SCP,q
+//                     K_thr,q = E q A / l,  K_SCP,q = legs G d^4 / (8 n D^3)
+//   sensor:           displacement + N(0, noise_mm), quantised to resolution_mm
+// Effects, each with a magnitude (0 = off), applied before the sensor:
+//   creep                     fraction of the strain that is viscoelastic (Kelvin element,
+//                             time constant creep_tau_s, relaxing during each dwell)
+//   drift                     linear trend over the test, as a fraction of the strain range
+//   lonely_stroke             running-maximum offset, fraction of the range (training)
+//   outliers                  spike size in strain ranges, on ~1 % of readings
+//   minor_loop_noncongruence  a of the moving Preisach model Gamma[u + a * range_u * y / range_y]
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "scpkit/hysteresis/preisach.hpp"
+#include "scpkit/mechanics/coil.hpp"
+#include "scpkit/mechanics/material.hpp"
+
+namespace scpkit {
+
+struct LoadProtocol {
+  double min_g = 20.0;   ///< lowest load for a 2-ply thread
+  double max_g = 250.0;  ///< highest load for a 2-ply thread
+  bool scale_with_plies = true;  ///< loads times plies / 2 (paper 002: 20-250, 40-500, 60-750 g)
+  int cycles = 8;                ///< damped oscillation cycles
+  int steps_per_half = 8;        ///< readings per half cycle
+  int minor_loops = 3;           ///< random minor loops, each run twice, after the damped part
+  double dwell_s = 180.0;        ///< hold before each reading (paper 002: 3 min)
+};
+
+struct RigEffects {
+  double creep = 0.0;
+  double creep_tau_s = 60.0;
+  double drift = 0.0;
+  double lonely_stroke = 0.0;
+  double outliers = 0.0;
+  double minor_loop_noncongruence = 0.0;
+};
+
+struct RigSpec {
+  std::uint64_t seed = 1;
+  std::string specimen = "pair";  ///< thread, scp, or pair (both strains in one file)
+  int plies = 2;
+  std::string material = "nylon-110-34-dtex";
+  double length_mm = 100.0;
+  std::optional<CoilGeometry> coil;  ///< default: the material card's geometry for `plies`
+  double scp_offset_pct = 0.2;       ///< c in eps_SCP = g eps_thr + c, strain-%
+  LoadProtocol protocol;
+  double resolution_mm = 0.04;
+  double noise_mm = 0.01;
+  RigEffects effects;
+  std::optional<std::vector<double>> load_sequence_g;  ///< replaces the protocol when given
+
+  void validate() const;  ///< InvalidArgument with the reason
+};
+
+/// Reads a rig description (TOML). InputError naming file, line and column.
+RigSpec load_rig_spec(const std::filesystem::path& path);
+
+struct RigRun {
+  std::map<std::string, std::string> metadata;  ///< SPEC metadata plus truth_* keys
+  std::vector<std::string> columns;
+  std::vector<std::vector<double>> rows;
+  double true_gain = 0.0;  ///< g_q of the truth
+  std::string to_csv() const;
+};
+
+/// The rig's ground-truth thread operator over the per-ply load in N (strain as fraction).
+PreisachModel rig_thread_truth(const Material& material);
+
+/// Runs the rig. Deterministic for a given spec (seeded).
+RigRun run_rig(const RigSpec& spec, const Material& material);
+
+/// The load protocol alone, in grams (damped oscillation then minor loops).
+std::vector<double> rig_load_protocol(const RigSpec& spec);
+
+}  // namespace scpkit

@@ -1,0 +1,124 @@
+#include "scpkit/io/model_file.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include "scpkit/error.hpp"
+#include "scpkit/io/atomic_file.hpp"
+#include "scpkit/version.hpp"
+
+namespace scpkit {
+
+using nlohmann::json;
+
+void save_model(const std::filesystem::path& path, const ModelFile& m) {
+  json j;
+  j["format"] = "scpkit-model";
+  j["version"] = 1;
+  j["scpkit"] = kVersion;
+  j["model"] = m.model;
+  j["input"] = m.input;
+  j["response"] = m.response;
+  j["response_column"] = m.response_column;
+  const PreisachGrid& g = m.preisach.grid();
+  j["preisach"] = {{"lo", g.lo},
+                   {"hi", g.hi},
+                   {"levels", g.levels},
+                   {"bias", m.preisach.bias()},
+                   {"weights", std::vector<double>(m.preisach.weights().begin(),
+                                                   m.preisach.weights().end())},
+                   {"weights_are", "cell masses, row-major over beta level i then alpha level j >= i"}};
+  json s;
+  s["specimen"] = m.specimen.specimen;
+  s["material"] = m.specimen.material;
+  s["plies"] = m.specimen.plies;
+  s["length_mm"] = m.specimen.length_mm;
+  if (m.specimen.coil) {
+    const CoilGeometry& c = *m.specimen.coil;
+    s["coil"] = {{"d_mm", c.wire_d_m * 1e3}, {"D_mm", c.mean_D_m * 1e3}, {"n", c.coils}, {"legs", c.legs}};
+  }
+  j["specimen"] = s;
+  if (m.scp_gain) {
+    j["scp_gain"] = {{"gain", m.scp_gain->gain},
+                     {"offset", m.scp_gain->offset},
+                     {"r2", m.scp_gain->r2},
+                     {"samples", m.scp_gain->samples}};
+  }
+  j["fit"] = {{"rms_pct_range", m.fit_metrics.rms_pct_range},
+              {"max_pct_range", m.fit_metrics.max_pct_range},
+              {"mean_abs", m.fit_metrics.mean_abs},
+              {"sd_abs", m.fit_metrics.sd_abs},
+              {"cv_rms_pct_range", m.cv_rms_pct_range},
+              {"data_file", m.data_file}};
+  write_file_atomically(path, j.dump(2) + "\n");
+}
+
+ModelFile load_model(const std::filesystem::path& path) {
+  const std::string name = path.string();
+  const std::string text = read_text_file(path);
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    // Byte offset -> line and column.
+    int line = 1, col = 1;
+    for (std::size_t i = 0; i + 1 < e.byte && i < text.size(); ++i) {
+      if (text[i] == '\n') {
+        ++line;
+        col = 1;
+      } else {
+        ++col;
+      }
+    }
+    throw InputError(name, line, col, "not a JSON model file");
+  }
+  try {
+    if (j.value("format", "") != "scpkit-model") throw InputError(name, 0, 0, "not an scpkit model file (format is not 'scpkit-model')");
+    if (j.value("version", 0) != 1) throw InputError(name, 0, 0, "unsupported model file version");
+    ModelFile m;
+    m.model = j.at("model").get<std::string>();
+    if (m.model != "preisach") throw InputError(name, 0, 0, "unknown model '" + m.model + "'");
+    m.input = j.at("input").get<std::string>();
+    m.response = j.at("response").get<std::string>();
+    m.response_column = j.value("response_column", "");
+    if (m.response != "strain" && m.response != "disp_mm") throw InputError(name, 0, 0, "unknown response '" + m.response + "'");
+    const json& p = j.at("preisach");
+    PreisachGrid g{p.at("lo").get<double>(), p.at("hi").get<double>(), p.at("levels").get<int>()};
+    const auto w = p.at("weights").get<std::vector<double>>();
+    m.preisach = PreisachModel(g, Eigen::Map<const Eigen::VectorXd>(w.data(), static_cast<Eigen::Index>(w.size())),
+                               p.at("bias").get<double>());
+    const json& s = j.at("specimen");
+    m.specimen.specimen = s.value("specimen", "");
+    m.specimen.material = s.value("material", "");
+    m.specimen.plies = s.value("plies", 0);
+    m.specimen.length_mm = s.value("length_mm", 0.0);
+    if (s.contains("coil")) {
+      const json& c = s.at("coil");
+      CoilGeometry coil;
+      coil.wire_d_m = c.at("d_mm").get<double>() * 1e-3;
+      coil.mean_D_m = c.at("D_mm").get<double>() * 1e-3;
+      coil.coils = c.at("n").get<double>();
+      coil.legs = c.value("legs", 1);
+      coil.validate();
+      m.specimen.coil = coil;
+    }
+    if (j.contains("scp_gain")) {
+      const json& gj = j.at("scp_gain");
+      m.scp_gain = GainFit{gj.at("gain").get<double>(), gj.at("offset").get<double>(),
+                           gj.at("r2").get<double>(), gj.at("samples").get<int>()};
+    }
+    const json& f = j.at("fit");
+    m.fit_metrics.rms_pct_range = f.value("rms_pct_range", 0.0);
+    m.fit_metrics.max_pct_range = f.value("max_pct_range", 0.0);
+    m.fit_metrics.mean_abs = f.value("mean_abs", 0.0);
+    m.fit_metrics.sd_abs = f.value("sd_abs", 0.0);
+    m.cv_rms_pct_range = f.value("cv_rms_pct_range", -1.0);
+    m.data_file = f.value("data_file", "");
+    return m;
+  } catch (const json::exception& e) {
+    throw InputError(name, 0, 0, std::string("malformed model file: ") + e.what());
+  } catch (const InvalidArgument& e) {
+    throw InputError(name, 0, 0, std::string("invalid model: ") + e.what());
+  }
+}
+
+}  // namespace scpkit

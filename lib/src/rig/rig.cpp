@@ -1,0 +1,313 @@
+#include "scpkit/rig/rig.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fmt/format.h>
+#include <random>
+#include <sstream>
+
+#include "../io/toml_reader.hpp"
+#include "scpkit/error.hpp"
+
+namespace scpkit {
+namespace {
+
+constexpr double kGram = 9.80665e-3;  // N per gram-force
+constexpr double kTruthMaxPerPlyN = 2.0;  // the truth's plane covers 0..2 N per ply (204 g)
+
+}  // namespace
+
+void RigSpec::validate() const {
+  if (specimen != "thread" && specimen != "scp" && specimen != "pair") {
+    throw_invalid("specimen must be thread, scp or pair, got '{}'", specimen);
+  }
+  if (plies < 1 || plies > 100) throw_invalid("plies must be 1..100, got {}", plies);
+  if (!(length_mm > 0.0)) throw_invalid("length_mm must be > 0");
+  if (!(resolution_mm >= 0.0) || !(noise_mm >= 0.0)) throw_invalid("sensor resolution and noise must be >= 0");
+  const LoadProtocol& p = protocol;
+  if (!(p.min_g >= 0.0) || !(p.max_g > p.min_g)) throw_invalid("protocol needs 0 <= min_g < max_g");
+  if (p.cycles < 1 || p.steps_per_half < 1 || p.minor_loops < 0) throw_invalid("protocol counts must be positive");
+  if (!(p.dwell_s > 0.0)) throw_invalid("dwell_s must be > 0");
+  const RigEffects& e = effects;
+  for (double v : {e.creep, e.drift, e.lonely_stroke, e.outliers, e.minor_loop_noncongruence}) {
+    if (!(v >= 0.0) || !std::isfinite(v)) throw_invalid("effect magnitudes must be finite and >= 0");
+  }
+  if (e.creep > 1.0) throw_invalid("creep is a fraction of the strain, <= 1");
+  if (!(e.creep_tau_s > 0.0)) throw_invalid("creep_tau_s must be > 0");
+  if (coil) coil->validate();
+  if (load_sequence_g) {
+    if (load_sequence_g->size() < 2) throw_invalid("load_sequence_g needs at least 2 loads");
+    for (double g : *load_sequence_g) {
+      if (!(g >= 0.0) || !std::isfinite(g)) throw_invalid("loads must be finite and >= 0 g");
+      if (g * kGram / plies > kTruthMaxPerPlyN) throw_invalid("load {} g exceeds the rig's {} N per ply", g, kTruthMaxPerPlyN);
+    }
+  }
+  const double scale = p.scale_with_plies ? plies / 2.0 : 1.0;
+  if (p.max_g * scale * kGram / plies > kTruthMaxPerPlyN) {
+    throw_invalid("protocol max load exceeds the rig's {} N per ply", kTruthMaxPerPlyN);
+  }
+}
+
+RigSpec load_rig_spec(const std::filesystem::path& path) {
+  using detail::TomlReader;
+  const toml::table root = TomlReader::parse(path);
+  const TomlReader r(path.string());
+  r.only_keys(root, {"seed", "specimen", "plies", "material", "length_mm", "scp_offset_pct", "coil",
+                     "protocol", "sensor", "effects", "load_sequence_g"});
+  RigSpec s;
+  s.seed = static_cast<std::uint64_t>(r.integer(root, "seed", 1, 0, 1LL << 62));
+  s.specimen = r.text(root, "specimen", s.specimen);
+  s.plies = static_cast<int>(r.integer(root, "plies", s.plies, 1, 100));
+  s.material = r.text(root, "material", s.material);
+  s.length_mm = r.positive(root, "length_mm", s.length_mm, false);
+  s.scp_offset_pct = r.number(root, "scp_offset_pct", s.scp_offset_pct, -100.0);
+  if (const toml::table* c = r.table(root, "coil")) {
+    r.only_keys(*c, {"d_mm", "D_mm", "n", "legs"});
+    CoilGeometry g;
+    g.wire_d_m = r.positive(*c, "d_mm") * 1e-3;
+    g.mean_D_m = r.positive(*c, "D_mm") * 1e-3;
+    g.coils = r.positive(*c, "n");
+    g.legs = static_cast<int>(r.integer(*c, "legs", 2, 1, 2));
+    s.coil = g;
+  }
+  if (const toml::table* p = r.table(root, "protocol")) {
+    r.only_keys(*p, {"min_g", "max_g", "scale_with_plies", "cycles", "steps_per_half", "minor_loops", "dwell_s"});
+    LoadProtocol& q = s.protocol;
+    q.min_g = r.number(*p, "min_g", q.min_g, 0.0);
+    q.max_g = r.positive(*p, "max_g", q.max_g, false);
+    q.scale_with_plies = r.boolean(*p, "scale_with_plies", q.scale_with_plies);
+    q.cycles = static_cast<int>(r.integer(*p, "cycles", q.cycles, 1, 10000));
+    q.steps_per_half = static_cast<int>(r.integer(*p, "steps_per_half", q.steps_per_half, 1, 10000));
+    q.minor_loops = static_cast<int>(r.integer(*p, "minor_loops", q.minor_loops, 0, 10000));
+    q.dwell_s = r.positive(*p, "dwell_s", q.dwell_s, false);
+  }
+  if (const toml::table* p = r.table(root, "sensor")) {
+    r.only_keys(*p, {"resolution_mm", "noise_mm"});
+    s.resolution_mm = r.number(*p, "resolution_mm", s.resolution_mm, 0.0);
+    s.noise_mm = r.number(*p, "noise_mm", s.noise_mm, 0.0);
+  }
+  if (const toml::table* p = r.table(root, "effects")) {
+    r.only_keys(*p, {"creep", "creep_tau_s", "drift", "lonely_stroke", "outliers", "minor_loop_noncongruence"});
+    RigEffects& e = s.effects;
+    e.creep = r.number(*p, "creep", 0.0, 0.0);
+    e.creep_tau_s = r.positive(*p, "creep_tau_s", e.creep_tau_s, false);
+    e.drift = r.number(*p, "drift", 0.0, 0.0);
+    e.lonely_stroke = r.number(*p, "lonely_stroke", 0.0, 0.0);
+    e.outliers = r.number(*p, "outliers", 0.0, 0.0);
+    e.minor_loop_noncongruence = r.number(*p, "minor_loop_noncongruence", 0.0, 0.0);
+  }
+  if (const toml::node* n = root.get("load_sequence_g")) {
+    const toml::array* a = n->as_array();
+    if (!a) r.fail(n, "'load_sequence_g' must be an array of numbers");
+    std::vector<double> loads;
+    for (const toml::node& x : *a) {
+      const auto v = x.value<double>();
+      if (!v) r.fail(&x, "'load_sequence_g' must hold numbers");
+      loads.push_back(*v);
+    }
+    s.load_sequence_g = loads;
+  }
+  try {
+    s.validate();
+  } catch (const InvalidArgument& e) {
+    r.fail(nullptr, e.what());
+  }
+  return s;
+}
+
+PreisachModel rig_thread_truth(const Material& material) {
+  // A fine Preisach plane over the per-ply load: a ridge of loop width ~0.25 N and an
+  // elastic band along the diagonal, softer at low load (textile threads stiffen as the
+  // filaments straighten). Scaled so that the rising branch from 0 to 125 g per ply spans
+  // F / (E A), the elastic strain of the card's thread.
+  const PreisachGrid grid{0.0, kTruthMaxPerPlyN, 40};
+  Eigen::VectorXd w(grid.cells());
+  const double h = grid.step();
+  for (int i = 0; i < grid.levels; ++i) {
+    for (int j = i; j < grid.levels; ++j) {
+      const double beta = (i + 0.5) * h, alpha = (j + (i == j ? 0.75 : 0.5)) * h;
+      const double width = alpha - beta, mean = 0.5 * (alpha + beta);
+      const double hysteretic = std::exp(-std::pow((width - 0.25) / 0.15, 2));
+      const double elastic = 3.0 * std::exp(-std::pow(width / 0.06, 2));
+      const double softening = 1.0 + 0.8 * std::exp(-mean / 0.4);
+      w[grid.cell_index(i, j)] = PreisachGrid::relative_area(i, j) * (hysteretic + elastic) * softening;
+    }
+  }
+  PreisachModel unit(grid, w, 0.0);
+  const double f_ref = 125.0 * kGram;
+  PreisachState s = PreisachState::negative_saturation(grid);
+  const double y0 = unit.step(s, 0.0);
+  const double y1 = unit.step(s, f_ref);
+  const double target = f_ref / (material.tensile_modulus_Pa.value * material.ply_area_m2());
+  const double scale = target / (y1 - y0);
+  return PreisachModel(grid, w * scale, unit.total_mass() * scale);  // zero strain at 0 N
+}
+
+std::vector<double> rig_load_protocol(const RigSpec& spec) {
+  if (spec.load_sequence_g) return *spec.load_sequence_g;
+  const LoadProtocol& p = spec.protocol;
+  const double scale = p.scale_with_plies ? spec.plies / 2.0 : 1.0;
+  const double lo = p.min_g * scale, hi = p.max_g * scale;
+  const double mid = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
+  std::vector<double> loads{lo};
+  auto ramp = [&](double to) {
+    const double from = loads.back();
+    for (int k = 1; k <= p.steps_per_half; ++k) loads.push_back(from + (to - from) * k / p.steps_per_half);
+  };
+  // Damped oscillation: amplitude falls geometrically to 15 % over the cycles.
+  const int turns = 2 * p.cycles;
+  const double decay = std::pow(0.15, 1.0 / std::max(turns - 1, 1));
+  double amp = half;
+  for (int k = 1; k <= turns; ++k) {
+    ramp(k % 2 == 1 ? mid + amp : mid - amp);
+    amp *= decay;
+  }
+  // Minor loops, each traversed twice, inside the range.
+  std::mt19937_64 rng(spec.seed * 7919 + 17);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  for (int m = 0; m < p.minor_loops; ++m) {
+    const double a = lo + (hi - lo) * 0.6 * U(rng);
+    const double b = a + (hi - a) * (0.3 + 0.6 * U(rng));
+    ramp(hi);  // a common maximum, then the loop
+    for (int rep = 0; rep < 2; ++rep) {
+      ramp(a);
+      ramp(b);
+    }
+  }
+  ramp(lo);
+  return loads;
+}
+
+RigRun run_rig(const RigSpec& spec, const Material& material) {
+  spec.validate();
+  CoilGeometry coil;
+  if (spec.coil) {
+    coil = *spec.coil;
+  } else if (const ReferenceGeometry* g = material.geometry_for(spec.plies)) {
+    coil = g->coil;
+  } else if (spec.specimen != "thread") {
+    throw_invalid("no coil given and material '{}' has no geometry for {} plies", material.id, spec.plies);
+  }
+  const double length_m = spec.length_mm * 1e-3;
+  double gain = 0.0;
+  if (spec.specimen != "thread") {
+    coil.length_m = length_m;
+    gain = material.thread_stiffness(spec.plies, length_m) /
+           spring_stiffness(material.shear_modulus_Pa.value, coil);
+  }
+  const PreisachModel truth = rig_thread_truth(material);
+  const std::vector<double> loads_g = rig_load_protocol(spec);
+  const std::size_t n = loads_g.size();
+  std::mt19937_64 rng(spec.seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+
+  // Nominal ranges for scaling the effects.
+  const auto [lmin, lmax] = std::minmax_element(loads_g.begin(), loads_g.end());
+  const double f_lo = *lmin * kGram / spec.plies, f_hi = *lmax * kGram / spec.plies;
+  const double f_range = std::max(f_hi - f_lo, 1e-9);
+  const double y_range = f_range / (material.tensile_modulus_Pa.value * material.ply_area_m2());
+  const RigEffects& e = spec.effects;
+
+  std::vector<double> material_strain(n), time_s(n);
+  PreisachState state = PreisachState::negative_saturation(truth.grid());
+  double viscous = 0.0, running_max = f_lo, t = 0.0;
+  for (std::size_t k = 0; k < n; ++k) {
+    t += spec.protocol.dwell_s;
+    time_s[k] = t;
+    const double f = loads_g[k] * kGram / spec.plies;
+    double y;
+    if (e.minor_loop_noncongruence > 0.0) {
+      // Moving Preisach model: input u + a * range_u * y / range_y, solved by fixed point.
+      const PreisachState before = state;
+      y = truth.output(state);
+      for (int it = 0; it < 30; ++it) {
+        state = before;
+        const double y_new = truth.step(state, f + e.minor_loop_noncongruence * f_range * y / y_range);
+        if (std::abs(y_new - y) < 1e-14) break;
+        y = y_new;
+      }
+    } else {
+      y = truth.step(state, f);
+    }
+    if (e.creep > 0.0) {
+      viscous = y + (viscous - y) * std::exp(-spec.protocol.dwell_s / e.creep_tau_s);
+      y = (1.0 - e.creep) * y + e.creep * viscous;
+    }
+    running_max = std::max(running_max, f);
+    y += e.lonely_stroke * y_range * (running_max - f_lo) / f_range;
+    material_strain[k] = y;
+  }
+  const double t_end = t;
+
+  // One measured channel: strain -> drift, outliers, sensor noise and quantisation.
+  auto measure = [&](double g, double offset) {
+    std::vector<double> pct(n);
+    const double range = std::abs(g) * y_range;
+    for (std::size_t k = 0; k < n; ++k) {
+      double strain = g * material_strain[k] + offset;
+      strain += e.drift * range * time_s[k] / t_end;
+      if (e.outliers > 0.0 && U(rng) < 0.01) {
+        strain += (U(rng) < 0.5 ? -1.0 : 1.0) * e.outliers * range * (1.0 + U(rng));
+      }
+      double disp = strain * spec.length_mm + spec.noise_mm * normal(rng);
+      if (spec.resolution_mm > 0.0) disp = std::round(disp / spec.resolution_mm) * spec.resolution_mm;
+      pct[k] = 100.0 * disp / spec.length_mm;
+    }
+    return pct;
+  };
+
+  RigRun run;
+  run.true_gain = gain;
+  run.metadata["specimen"] = spec.specimen;
+  run.metadata["plies"] = std::to_string(spec.plies);
+  run.metadata["length_mm"] = fmt::format("{:g}", spec.length_mm);
+  run.metadata["material"] = material.id;
+  if (spec.specimen != "thread") {
+    run.metadata["coil_d_mm"] = fmt::format("{:g}", coil.wire_d_m * 1e3);
+    run.metadata["coil_D_mm"] = fmt::format("{:g}", coil.mean_D_m * 1e3);
+    run.metadata["coil_n"] = fmt::format("{:g}", coil.coils);
+    run.metadata["legs"] = std::to_string(coil.legs);
+    run.metadata["truth_gain"] = fmt::format("{:.6g}", gain);
+  }
+  run.metadata["synthetic"] = fmt::format("scpkit virtual test rig, seed {}", spec.seed);
+  run.metadata["truth_effects"] = fmt::format(
+      "creep={:g} creep_tau_s={:g} drift={:g} lonely_stroke={:g} outliers={:g} "
+      "minor_loop_noncongruence={:g}",
+      e.creep, e.creep_tau_s, e.drift, e.lonely_stroke, e.outliers, e.minor_loop_noncongruence);
+  run.metadata["sensor"] = fmt::format("resolution {:g} mm, noise {:g} mm", spec.resolution_mm, spec.noise_mm);
+
+  const std::vector<double> thread = spec.specimen != "scp" ? measure(1.0, 0.0) : std::vector<double>{};
+  const std::vector<double> scp = spec.specimen != "thread" ? measure(gain, spec.scp_offset_pct / 100.0)
+                                                            : std::vector<double>{};
+  if (spec.specimen == "pair") {
+    run.columns = {"time_s", "dwell_s", "load_g", "thread_strain_pct", "scp_strain_pct"};
+  } else {
+    run.columns = {"time_s", "dwell_s", "load_g", "disp_mm"};
+  }
+  for (std::size_t k = 0; k < n; ++k) {
+    std::vector<double> row{time_s[k], spec.protocol.dwell_s, loads_g[k]};
+    if (spec.specimen == "pair") {
+      row.push_back(thread[k]);
+      row.push_back(scp[k]);
+    } else {
+      row.push_back((spec.specimen == "thread" ? thread[k] : scp[k]) * spec.length_mm / 100.0);
+    }
+    run.rows.push_back(std::move(row));
+  }
+  return run;
+}
+
+std::string RigRun::to_csv() const {
+  std::ostringstream out;
+  for (const auto& [k, v] : metadata) out << "# " << k << ": " << v << "\n";
+  for (std::size_t c = 0; c < columns.size(); ++c) out << (c ? "," : "") << columns[c];
+  out << "\n";
+  for (const auto& row : rows) {
+    for (std::size_t c = 0; c < row.size(); ++c) out << (c ? "," : "") << fmt::format("{:.10g}", row[c]);
+    out << "\n";
+  }
+  return out.str();
+}
+
+}  // namespace scpkit
