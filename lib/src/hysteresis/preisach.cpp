@@ -1,6 +1,7 @@
 #include "scpkit/hysteresis/preisach.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 #include "scpkit/error.hpp"
@@ -18,6 +19,7 @@ void PreisachGrid::validate() const {
 
 PreisachState::PreisachState(double lo, double hi) : lo_(lo), hi_(hi) {
   points_.reserve(64);
+  prefix_.reserve(64);
   points_.push_back(lo);
 }
 
@@ -54,6 +56,7 @@ PreisachState PreisachState::from_turning_points(const PreisachGrid& grid,
   }
   s.points_ = std::move(points);
   s.points_.reserve(64);
+  s.cache_valid_ = 0;
   // Apply the last point again so that a non-dominant current input is wiped out properly.
   const double last = s.points_.back();
   s.apply(last);
@@ -63,6 +66,8 @@ PreisachState PreisachState::from_turning_points(const PreisachGrid& grid,
 void PreisachState::apply(double u) {
   u = std::clamp(u, lo_, hi_);
   std::size_t n = points_.size() - 1;
+  // Cached Everett term k depends on points k-1 and k; terms below the top stay valid
+  // unless wiping-out rewrites an earlier point.
   if (n == 0) {
     if (u > points_[0]) points_.push_back(u);
     return;
@@ -72,9 +77,11 @@ void PreisachState::apply(double u) {
   if (u == top) return;
   if ((u > top) == rising) {
     points_[n] = u;  // same direction: move the current extremum
+    invalidate_from(n - 1);
   } else {
     points_.push_back(u);  // reversal: the old input becomes a turning point
     ++n;
+    invalidate_from(n - 1);
   }
   // Wiping-out: the input passing an earlier extremum of its kind erases that extremum and
   // the one between them.
@@ -85,14 +92,22 @@ void PreisachState::apply(double u) {
     points_[n - 2] = u;
     points_.resize(n - 1);
     n -= 2;
+    invalidate_from(n >= 1 ? n - 1 : 0);
   }
-  if (n == 0) points_[0] = lo_;
+  if (n == 0) {
+    points_[0] = lo_;
+    invalidate_from(0);
+  }
 }
 
 // ---------------------------------------------------------------- model
 
+namespace {
+std::atomic<std::uint64_t> next_model_id{1};
+}  // namespace
+
 PreisachModel::PreisachModel(PreisachGrid grid, Eigen::VectorXd weights, double bias)
-    : grid_(grid), weights_(std::move(weights)), bias_(bias) {
+    : grid_(grid), weights_(std::move(weights)), bias_(bias), id_(next_model_id++) {
   grid_.validate();
   const int L = grid_.levels;
   if (weights_.size() != grid_.cells()) {
@@ -152,11 +167,24 @@ double PreisachModel::everett(double a, double b) const {
 }
 
 double PreisachModel::output(const PreisachState& state) const {
-  const auto s = state.turning_points();
-  double plus = 0.0;
-  for (std::size_t i = 1; i < s.size(); i += 2) plus += everett(s[i], s[i - 1]);
-  for (std::size_t i = 2; i < s.size(); i += 2) plus -= everett(s[i - 1], s[i]);
-  return bias_ + 2.0 * plus - total_;
+  // mu(+) = sum_{k=1..n} (-1)^(k+1) E(max(s_{k-1}, s_k), min(s_{k-1}, s_k)); the terms below
+  // the top one are cached in the state as prefix sums.
+  const std::vector<double>& s = state.points_;
+  const std::size_t n = s.size() - 1;
+  if (n == 0) return bias_ - total_;
+  auto term = [&](std::size_t k) {
+    return k % 2 == 1 ? everett(s[k], s[k - 1]) : -everett(s[k - 1], s[k]);
+  };
+  std::vector<double>& prefix = state.prefix_;
+  if (state.cache_owner_ != id_) {
+    state.cache_owner_ = id_;
+    state.cache_valid_ = 0;
+  }
+  if (prefix.size() < n) prefix.resize(std::max<std::size_t>(n, 2 * prefix.size()));
+  prefix[0] = 0.0;
+  for (std::size_t k = state.cache_valid_ + 1; k < n; ++k) prefix[k] = prefix[k - 1] + term(k);
+  state.cache_valid_ = n - 1;
+  return bias_ + 2.0 * (prefix[n - 1] + term(n)) - total_;
 }
 
 Eigen::VectorXd PreisachModel::simulate(PreisachState& state, std::span<const double> input) const {

@@ -43,6 +43,69 @@ int solve_passive(const Eigen::MatrixXd& G, const Eigen::VectorXd& f, const std:
   return tiny;
 }
 
+
+// Lawson-Hanson active-set iteration from a feasible x. Updates x, the passive flags and r.
+void lawson_hanson(const Eigen::MatrixXd& G, const Eigen::VectorXd& f,
+                   const std::vector<bool>& constrained, double tol, int max_iter,
+                   Eigen::VectorXd& x, std::vector<char>& in_p, NnlsResult& r) {
+  const Eigen::Index n = f.size();
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (constrained[i] && !(x[i] > 0.0)) x[i] = 0.0;
+    in_p[i] = !constrained[i] || x[i] > 0.0;
+  }
+  auto passive = [&] {
+    std::vector<int> P;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      if (in_p[i]) P.push_back(static_cast<int>(i));
+    }
+    return P;
+  };
+  Eigen::VectorXd z(n);
+  bool need_inner = true;
+  for (int it = 0; it < max_iter; ++it, ++r.iterations) {
+    if (!need_inner) {
+      const Eigen::VectorXd w = f - G * x;
+      Eigen::Index t = -1;
+      double best = tol;
+      for (Eigen::Index i = 0; i < n; ++i) {
+        if (!in_p[i] && w[i] > best) {
+          best = w[i];
+          t = i;
+        }
+      }
+      if (t < 0) {
+        r.converged = true;
+        return;
+      }
+      in_p[t] = 1;
+    }
+    need_inner = false;
+    for (Eigen::Index inner = 0; inner <= n; ++inner) {
+      r.rank_deficient_pivots = solve_passive(G, f, passive(), z);
+      double alpha = 1.0;
+      bool feasible = true;
+      for (Eigen::Index i = 0; i < n; ++i) {
+        if (in_p[i] && constrained[i] && z[i] <= 0.0) {
+          feasible = false;
+          const double denom = x[i] - z[i];
+          if (denom > 0.0) alpha = std::min(alpha, x[i] / denom);
+        }
+      }
+      if (feasible) {
+        x = z;
+        break;
+      }
+      x += alpha * (z - x);
+      for (Eigen::Index i = 0; i < n; ++i) {
+        if (in_p[i] && constrained[i] && x[i] <= tol * 1e-3 / std::max(G(i, i), 1e-300)) {
+          in_p[i] = 0;
+          x[i] = 0.0;
+        }
+      }
+    }
+  }
+}
+
 }  // namespace
 
 double kkt_violation(const Eigen::MatrixXd& G, const Eigen::VectorXd& f, const Eigen::VectorXd& x,
@@ -97,12 +160,11 @@ NnlsResult solve_nnls(const Eigen::MatrixXd& G, const Eigen::VectorXd& f,
     if (change <= tol) break;
   }
 
-  // Phase 2: Lawson-Hanson from the warm start's support.
+  // Phase 2: block principal pivoting (Kim & Park, SIAM J. Sci. Comput. 33(6), 2011) from the
+  // warm start's support: exchange every infeasible index at once, with Murty's single-index
+  // backup rule to guarantee termination. Each step is one solve on the passive set.
   std::vector<char> in_p(static_cast<std::size_t>(n), 0);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    in_p[i] = !constrained[i] || x[i] > 0.0;
-    if (constrained[i] && x[i] <= 0.0) x[i] = 0.0;
-  }
+  for (Eigen::Index i = 0; i < n; ++i) in_p[i] = !constrained[i] || x[i] > 0.0;
   auto passive = [&] {
     std::vector<int> P;
     for (Eigen::Index i = 0; i < n; ++i) {
@@ -113,57 +175,47 @@ NnlsResult solve_nnls(const Eigen::MatrixXd& G, const Eigen::VectorXd& f,
   const int max_iter = options.max_iterations > 0 ? options.max_iterations
                                                   : static_cast<int>(3 * n + 30);
   Eigen::VectorXd z(n);
-  bool need_inner = true;  // the warm start is feasible but not yet optimal on its support
+  int best_count = static_cast<int>(n) + 1, chances = 3;
   for (r.iterations = 0; r.iterations < max_iter; ++r.iterations) {
-    if (!need_inner) {
-      const Eigen::VectorXd w = f - G * x;
-      Eigen::Index t = -1;
-      double best = tol;
-      for (Eigen::Index i = 0; i < n; ++i) {
-        if (!in_p[i] && w[i] > best) {
-          best = w[i];
-          t = i;
-        }
-      }
-      if (t < 0) {
-        r.converged = true;
-        break;
-      }
-      in_p[t] = 1;
+    r.rank_deficient_pivots = solve_passive(G, f, passive(), z);
+    const Eigen::VectorXd grad = G * z - f;  // >= 0 required on the active set
+    std::vector<Eigen::Index> bad;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      if (!constrained[i]) continue;
+      const double gtol = tol;
+      if (in_p[i] ? z[i] < 0.0 : grad[i] < -gtol) bad.push_back(i);
     }
-    need_inner = false;
-    // Inner loop: step back towards feasibility until the passive-set solution is positive.
-    for (int inner = 0; inner <= n; ++inner) {
-      r.rank_deficient_pivots = solve_passive(G, f, passive(), z);
-      double alpha = 1.0;
-      bool feasible = true;
+    if (bad.empty()) {
+      x = z;
       for (Eigen::Index i = 0; i < n; ++i) {
-        if (in_p[i] && constrained[i] && z[i] <= 0.0) {
-          feasible = false;
-          const double denom = x[i] - z[i];
-          if (denom > 0.0) alpha = std::min(alpha, x[i] / denom);
-        }
+        if (constrained[i] && !in_p[i]) x[i] = 0.0;
       }
-      if (feasible) {
-        x = z;
-        break;
-      }
-      x += alpha * (z - x);
-      for (Eigen::Index i = 0; i < n; ++i) {
-        if (in_p[i] && constrained[i] && x[i] <= tol * 1e-3 / std::max(G(i, i), 1e-300)) {
-          in_p[i] = 0;
-          x[i] = 0.0;
-        }
-      }
+      r.converged = true;
+      break;
     }
+    const int count = static_cast<int>(bad.size());
+    if (count < best_count) {
+      best_count = count;
+      chances = 3;
+      for (Eigen::Index i : bad) in_p[i] = !in_p[i];
+    } else if (chances > 0) {
+      --chances;
+      for (Eigen::Index i : bad) in_p[i] = !in_p[i];
+    } else {
+      in_p[bad.back()] = !in_p[bad.back()];  // backup rule: the largest infeasible index
+    }
+  }
+  if (!r.converged) {
+    // Safety net: Lawson-Hanson from the coordinate-descent point (always feasible).
+    lawson_hanson(G, f, constrained, tol, max_iter, x, in_p, r);
   }
   r.kkt_violation = kkt_violation(G, f, x, constrained, options.relative_tolerance);
   r.passive = static_cast<int>(std::count(in_p.begin(), in_p.end(), 1));
   if (!r.converged) {
-    r.message = fmt::format("Lawson-Hanson stopped after {} iterations (KKT violation {:.3g})",
+    r.message = fmt::format("NNLS stopped after {} iterations (KKT violation {:.3g})",
                             r.iterations, r.kkt_violation);
   } else {
-    r.message = fmt::format("converged in {} Lawson-Hanson iterations, {} of {} entries free",
+    r.message = fmt::format("NNLS converged in {} active-set iterations, {} of {} entries free",
                             r.iterations, r.passive, n);
   }
   return r;

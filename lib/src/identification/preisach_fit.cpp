@@ -118,12 +118,41 @@ NnlsResult solve_design(const Design& d, double lambda, int skip, const NnlsOpti
   return solve_nnls(G, f, constrained, nnls);
 }
 
+// Blocks that may be held out: those whose input range the other blocks cover, so that the
+// score measures interpolation, not extrapolation beyond the identified input range (a
+// block holding the only excursion to the input maximum always stays in training).
+std::vector<char> heldout_eligible(std::span<const double> input, const std::vector<int>& block_of,
+                                   int nblocks) {
+  std::vector<double> lo(nblocks, std::numeric_limits<double>::infinity());
+  std::vector<double> hi(nblocks, -std::numeric_limits<double>::infinity());
+  for (std::size_t t = 0; t < input.size(); ++t) {
+    lo[block_of[t]] = std::min(lo[block_of[t]], input[t]);
+    hi[block_of[t]] = std::max(hi[block_of[t]], input[t]);
+  }
+  std::vector<char> ok(nblocks, 0);
+  int count = 0;
+  for (int b = 0; b < nblocks; ++b) {
+    double rest_lo = std::numeric_limits<double>::infinity(), rest_hi = -rest_lo;
+    for (int o = 0; o < nblocks; ++o) {
+      if (o == b) continue;
+      rest_lo = std::min(rest_lo, lo[o]);
+      rest_hi = std::max(rest_hi, hi[o]);
+    }
+    const double tol = 1e-9 * (std::abs(rest_hi) + std::abs(rest_lo) + 1.0);
+    ok[b] = std::isfinite(lo[b]) && lo[b] >= rest_lo - tol && hi[b] <= rest_hi + tol;
+    count += ok[b];
+  }
+  if (count < 2) std::fill(ok.begin(), ok.end(), 1);  // nothing better: hold out every block
+  return ok;
+}
+
 double heldout_rms_pct(const Design& d, double lambda, const std::vector<int>& block_of,
-                       std::span<const double> output, double range, const NnlsOptions& nnls) {
+                       const std::vector<char>& eligible, std::span<const double> output,
+                       double range, const NnlsOptions& nnls) {
   double sum_sq = 0.0;
   int count = 0;
   for (std::size_t b = 0; b < d.gram.size(); ++b) {
-    if (d.rows[b] == 0) continue;
+    if (d.rows[b] == 0 || !eligible[b]) continue;
     const NnlsResult r = solve_design(d, lambda, static_cast<int>(b), nnls);
     for (Eigen::Index t = 0; t < d.A.rows(); ++t) {
       if (block_of[t] != static_cast<int>(b)) continue;
@@ -245,10 +274,16 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
                                     ? std::vector<double>{options.smoothness}
                                     : options.candidate_smoothness;
   const bool run_cv = levels.size() > 1 || lambdas.size() > 1;
-  // Never offer more unknowns than half the samples.
-  const int max_cells = static_cast<int>(n) / 2;
-  std::erase_if(levels, [&](int L) { return run_cv && L * (L + 1) / 2 + 1 > max_cells; });
+  // Never offer more unknowns than the data can carry: half the samples without
+  // regularisation, twice the samples with it (the smoothness term adds the rest).
+  auto too_big = [&](int L, double lambda) {
+    const double cells = L * (L + 1) / 2 + 1.0;
+    return cells > (lambda > 0.0 ? 2.0 : 0.5) * static_cast<double>(n);
+  };
+  std::erase_if(levels, [&](int L) { return run_cv && too_big(L, *std::max_element(lambdas.begin(), lambdas.end())); });
   if (levels.empty()) levels = {std::max(1, std::min(options.candidate_levels.front(), 4))};
+  const std::vector<char> eligible = heldout_eligible(input, block_of, nblocks);
+  summary.heldout_blocks = static_cast<int>(std::count(eligible.begin(), eligible.end(), 1));
 
   PreisachGrid chosen = base;
   double chosen_lambda = lambdas.front();
@@ -259,7 +294,8 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
       g.levels = L;
       const Design d = make_design(g, sign, input, output, block_of, nblocks);
       for (double lam : lambdas) {
-        const double cv = heldout_rms_pct(d, lam, block_of, output, range, options.nnls);
+        if (too_big(L, lam)) continue;
+        const double cv = heldout_rms_pct(d, lam, block_of, eligible, output, range, options.nnls);
         summary.cross_validation.push_back({L, lam, cv});
         // Prefer the simpler setting unless the gain is at least 1 % of the error.
         if (cv < best * 0.99) {
@@ -317,8 +353,10 @@ std::string PreisachFitSummary::BriefReport() const {
       termination == Termination::kConverged ? "converged" : "NOT converged", train.max_pct_range,
       train.rms_pct_range);
   if (cv_rms_pct_range >= 0.0) {
-    s += fmt::format("\n  cross-validated over {} blocks: held-out E_RMS {:.3f} % of range",
-                     folds_used, cv_rms_pct_range);
+    s += fmt::format(
+        "\n  cross-validated on {} of {} blocks (the rest cover the input extremes): held-out "
+        "E_RMS {:.3f} % of range",
+        heldout_blocks, folds_used, cv_rms_pct_range);
   }
   for (const auto& w : warnings) s += "\n  warning: " + w;
   return s;

@@ -33,6 +33,9 @@ void RigSpec::validate() const {
     if (!(v >= 0.0) || !std::isfinite(v)) throw_invalid("effect magnitudes must be finite and >= 0");
   }
   if (e.creep > 1.0) throw_invalid("creep is a fraction of the strain, <= 1");
+  if (e.minor_loop_noncongruence > 0.4) {
+    throw_invalid("minor_loop_noncongruence must be <= 0.4 (the shifted input would leave the truth's plane)");
+  }
   if (!(e.creep_tau_s > 0.0)) throw_invalid("creep_tau_s must be > 0");
   if (coil) coil->validate();
   if (load_sequence_g) {
@@ -127,7 +130,7 @@ PreisachModel rig_thread_truth(const Material& material) {
     for (int j = i; j < grid.levels; ++j) {
       const double beta = (i + 0.5) * h, alpha = (j + (i == j ? 0.75 : 0.5)) * h;
       const double width = alpha - beta, mean = 0.5 * (alpha + beta);
-      const double hysteretic = std::exp(-std::pow((width - 0.25) / 0.15, 2));
+      const double hysteretic = std::exp(-std::pow((width - 0.3) / 0.3, 2));
       const double elastic = 3.0 * std::exp(-std::pow(width / 0.06, 2));
       const double softening = 1.0 + 0.8 * std::exp(-mean / 0.4);
       w[grid.cell_index(i, j)] = PreisachGrid::relative_area(i, j) * (hysteretic + elastic) * softening;

@@ -24,6 +24,7 @@
 // O(memory depth). Parameters (PreisachModel) are an immutable value; the memory
 // (PreisachState) is the only thing a step changes.
 #include <Eigen/Core>
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -66,9 +67,18 @@ class PreisachState {
   int depth() const { return static_cast<int>(points_.size()) - 1; }
 
  private:
+  friend class PreisachModel;
   PreisachState(double lo, double hi);
+  void invalidate_from(std::size_t index) {
+    if (cache_valid_ > index) cache_valid_ = index;
+  }
   double lo_, hi_;
   std::vector<double> points_;
+  // Cache of the frozen part of mu(+) (prefix sums of the Everett terms) for the model whose
+  // id is cache_owner_: makes a step O(1) amortised. Not part of the memory's value.
+  mutable std::vector<double> prefix_;
+  mutable std::uint64_t cache_owner_ = 0;
+  mutable std::size_t cache_valid_ = 0;
 };
 
 /// An identified Preisach operator: grid, cell masses and bias. Immutable.
@@ -88,7 +98,8 @@ class PreisachModel {
   /// Mass of the whole plane.
   double total_mass() const { return total_; }
 
-  /// Output for a given memory, O(depth).
+  /// Output for a given memory: O(depth) the first time, O(1) amortised when the same state
+  /// is stepped with this model (the state caches the frozen part of the sum).
   double output(const PreisachState& state) const;
   /// Applies u to the state and returns the new output.
   double step(PreisachState& state, double u) const {
@@ -109,6 +120,7 @@ class PreisachModel {
   PreisachGrid grid_;
   Eigen::VectorXd weights_;
   double bias_;
+  std::uint64_t id_ = 0;  // identifies the parameters for the state's cache
   double total_ = 0.0;
   Eigen::MatrixXd w_;       // (L+1) x (L+1), w_(i, j) = mass of cell (i, j), zero elsewhere
   Eigen::MatrixXd node_;    // node_(J, I) = mass of cells with I <= i <= j < J

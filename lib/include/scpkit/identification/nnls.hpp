@@ -6,8 +6,9 @@
 //
 // with G = A'A (+ a regularisation term) symmetric positive semi-definite. Unconstrained
 // entries (the Preisach bias) stay free. The active set is warm-started by projected
-// coordinate descent and then made exact by the Lawson-Hanson iteration, so the answer meets
-// the KKT conditions to round-off:
+// coordinate descent and then made exact by block principal pivoting (Kim & Park 2011, an
+// active-set method that exchanges many indices per step), with the classic Lawson-Hanson
+// iteration as a safety net, so the answer meets the KKT conditions to round-off:
 //   x_i >= 0, w_i = f_i - (G x)_i <= tol, x_i w_i = 0 (constrained); w_i = 0 (free).
 #include <Eigen/Core>
 #include <string>

@@ -26,9 +26,9 @@ namespace scpkit {
 
 struct PreisachFitOptions {
   int levels = 0;  ///< L; 0 = choose by cross-validation among candidate_levels
-  std::vector<int> candidate_levels = {6, 8, 10, 12, 15, 20, 25};
+  std::vector<int> candidate_levels = {6, 8, 10, 12, 15, 20, 25, 30};
   double smoothness = -1.0;  ///< lambda; < 0 = choose by cross-validation
-  std::vector<double> candidate_smoothness = {0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2};
+  std::vector<double> candidate_smoothness = {0.0, 1e-6, 3e-6, 1e-5, 3e-5, 1e-4, 1e-3, 1e-2};
   int sign = 0;                ///< +1: densities >= 0; -1: <= 0 (falling response); 0: from data
   std::optional<double> lo;    ///< lowest threshold; default: smallest input
   std::optional<double> hi;    ///< highest threshold; default: largest input
@@ -56,7 +56,8 @@ struct PreisachFitSummary {
   int unidentified_directions = 0;  ///< cells + 1 minus the rank of the regressor
   int nnls_iterations = 0;
   double kkt_violation = 0.0;
-  int folds_used = 0;
+  int folds_used = 0;      ///< blocks the record was cut into
+  int heldout_blocks = 0;  ///< blocks held out in turn (covered by the others' input range)
   std::vector<CrossValidationPoint> cross_validation;  ///< empty when L and lambda were given
   double cv_rms_pct_range = -1.0;  ///< the chosen setting's held-out error; -1 if not run
   ErrorMetrics train;              ///< on the identification data

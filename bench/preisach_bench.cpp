@@ -1,0 +1,84 @@
+// Preisach forward step and identification (targets in ../shared/SPEC.md "Performance").
+//   forward step, L = 20:                  >= 20 million input steps per second, one core
+//   identification, L = 10, 300 rows:      <= 5 ms
+//   identification, L = 40, 20 000 rows:   <= 2 s
+#include <benchmark/benchmark.h>
+
+#include <random>
+#include <vector>
+
+#include "scpkit/hysteresis/preisach.hpp"
+#include "scpkit/identification/preisach_fit.hpp"
+
+namespace {
+
+using namespace scpkit;
+
+PreisachModel random_model(int L, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  PreisachGrid g{0.0, 1.0, L};
+  Eigen::VectorXd w(g.cells());
+  for (Eigen::Index k = 0; k < w.size(); ++k) w[k] = U(rng);
+  return PreisachModel(g, w, 0.1);
+}
+
+// A damped random walk of turning points with several readings per half cycle, like a
+// quasi-static test: memory depth stays realistic (a few to a dozen extrema).
+std::vector<double> test_like_input(std::size_t n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  std::vector<double> u;
+  double prev = 0.0;
+  while (u.size() < n) {
+    const double target = U(rng);
+    const int steps = 2 + static_cast<int>(U(rng) * 8);
+    for (int k = 1; k <= steps && u.size() < n; ++k) u.push_back(prev + (target - prev) * k / steps);
+    prev = target;
+  }
+  return u;
+}
+
+void BM_PreisachForwardStep(benchmark::State& state) {
+  const int L = static_cast<int>(state.range(0));
+  const PreisachModel model = random_model(L, 1);
+  const std::vector<double> u = test_like_input(1 << 16, 2);
+  PreisachState s = PreisachState::negative_saturation(model.grid());
+  std::size_t i = 0;
+  double sink = 0.0;
+  for (auto _ : state) {
+    sink += model.step(s, u[i]);
+    i = (i + 1) & (u.size() - 1);
+  }
+  benchmark::DoNotOptimize(sink);
+  state.SetItemsProcessed(state.iterations());
+  state.counters["depth"] = s.depth();
+}
+BENCHMARK(BM_PreisachForwardStep)->Arg(10)->Arg(20)->Arg(40);
+
+void BM_PreisachIdentification(benchmark::State& state) {
+  const int L = static_cast<int>(state.range(0));
+  const auto rows = static_cast<std::size_t>(state.range(1));
+  const PreisachModel truth = random_model(L, 3);
+  const std::vector<double> u = test_like_input(rows, 4);
+  PreisachState s = PreisachState::negative_saturation(truth.grid());
+  Eigen::VectorXd y = truth.simulate(s, u);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 1e-3 * y.cwiseAbs().maxCoeff());
+  for (Eigen::Index t = 0; t < y.size(); ++t) y[t] += noise(rng);
+  PreisachFitOptions opt;  // fixed L and smoothness: one identification, no cross-validation
+  opt.levels = L;
+  opt.smoothness = 0.0;
+  opt.lo = 0.0;
+  opt.hi = 1.0;
+  for (auto _ : state) {
+    PreisachFit fit = fit_preisach(u, std::span<const double>(y.data(), rows), {}, opt);
+    benchmark::DoNotOptimize(fit.model.bias());
+  }
+}
+BENCHMARK(BM_PreisachIdentification)->Args({10, 300})->Args({20, 2000})->Args({40, 20000})
+    ->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();
