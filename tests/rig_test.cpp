@@ -184,7 +184,7 @@ TEST(Rig, NonCongruenceMakesRepeatedMinorLoopsHistoryDependent) {
     return std::abs((y[5] - y[4]) - (y[13] - y[12]));
   };
   EXPECT_LT(mismatch(0.0), 1e-9);
-  EXPECT_GT(mismatch(0.2), 1e-3);
+  EXPECT_GT(mismatch(0.2), 5e-4);  // mm; the clean loops agree to 1e-9
   EXPECT_GT(mismatch(0.2), 1.5 * mismatch(0.1));
 }
 
