@@ -42,7 +42,12 @@ class TomlReader {
     for (const auto& [k, v] : t) {
       bool ok = false;
       for (const char* a : allowed) ok = ok || k.str() == a;
-      if (!ok) fail(&v, fmt::format("unknown key '{}'", k.str()));
+      if (!ok) {
+        const auto& b = k.source().begin;
+        (void)v;
+        throw InputError(file_, static_cast<int>(b.line), static_cast<int>(b.column),
+                         fmt::format("unknown key '{}'", k.str()));
+      }
     }
   }
 

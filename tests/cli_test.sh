@@ -1,0 +1,95 @@
+#!/usr/bin/env bash
+# End-to-end checks of the scpkit command line: help, exit codes, outputs, and bad input
+# (one clear error naming file:line:column, non-zero exit, no partial or clobbered output).
+# Usage: cli_test.sh SCPKIT_BINARY SOURCE_DIR
+set -u
+bin=$1
+src=$2
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+pass=0
+fail=0
+
+# check NAME EXPECTED_EXIT PATTERN -- COMMAND...: runs COMMAND, compares the exit code and
+# greps stdout+stderr for PATTERN (extended regex).
+check() {
+  local name=$1 want=$2 pattern=$3
+  shift 4
+  local out rc
+  out=$("$@" 2>&1)
+  rc=$?
+  if [ "$rc" -eq "$want" ] && grep -Eq -- "$pattern" <<<"$out"; then
+    pass=$((pass + 1))
+  else
+    fail=$((fail + 1))
+    echo "FAIL: $name (exit $rc, wanted $want; pattern '$pattern')"
+    echo "$out" | head -20 | sed 's/^/    /'
+  fi
+}
+
+# assert NAME CONDITION...: a plain test command.
+assert() {
+  local name=$1
+  shift
+  if "$@"; then pass=$((pass + 1)); else fail=$((fail + 1)); echo "FAIL: $name"; fi
+}
+
+ex=$src/examples/data
+check "help" 0 "commands:" -- "$bin" --help
+check "no args is a usage error" 2 "usage: scpkit" -- "$bin"
+check "version" 0 "^scpkit [0-9]+\.[0-9]+\.[0-9]+" -- "$bin" --version
+check "unknown command" 2 "unknown command 'frobnicate'" -- "$bin" frobnicate
+for c in fit predict map simulate; do
+  check "$c --help" 0 "usage: scpkit $c" -- "$bin" "$c" --help
+done
+check "unknown option" 2 "unrecognised option|unrecognized option" -- "$bin" fit "$ex/pair-2ply.csv" --bogus
+check "missing positional" 2 "missing DATA" -- "$bin" fit
+check "model not in this version" 2 "not available" -- "$bin" fit "$ex/pair-2ply.csv" --model gpi
+
+# The main job.
+check "fit paired 2-ply" 0 "SCP gain: scp = [0-9.]+ \* thread" -- "$bin" fit "$ex/pair-2ply.csv" -o "$work/m2.json"
+assert "model file written" test -s "$work/m2.json"
+check "fit --json is one object" 0 '"rms_pct_range"' -- "$bin" fit "$ex/pair-2ply.csv" -o "$work/m2b.json" --json
+if command -v python3 >/dev/null; then
+  assert "fit --json parses" python3 -c "import json,sys; json.loads(sys.stdin.read())" \
+    < <("$bin" fit "$ex/pair-2ply.csv" -o "$work/m2c.json" --json 2>/dev/null)
+  assert "predict --json parses with the SPEC keys" python3 -c "
+import json,sys; d=json.loads(sys.stdin.read())
+assert all(k in d for k in ('rms_pct_range','max_pct_range','mean_abs','sd_abs')), d" \
+    < <("$bin" predict "$work/m2.json" "$ex/pair-2ply.csv" --json 2>/dev/null)
+fi
+check "predict to file" 0 "predictions written" -- "$bin" predict "$work/m2.json" "$ex/pair-2ply.csv" -o "$work/p.csv"
+assert "predicted column added" grep -q "^time_s,dwell_s,load_g,thread_strain_pct,scp_strain_pct,predicted_thread_strain_pct$" "$work/p.csv"
+check "predict to stdout" 0 "predicted_thread_strain_pct" -- "$bin" predict "$work/m2.json" "$ex/pair-2ply.csv"
+check "map 4-ply with data" 0 "corrected Eq. 8" -- "$bin" map "$work/m2.json" --plies 4 --data "$ex/pair-4ply.csv" -o "$work/map4.csv"
+assert "map csv has the band" grep -q "scp_band_lo_strain_pct" "$work/map4.csv"
+check "map without data" 0 "predicted 6-ply SCP major loop" -- "$bin" map "$work/m2.json" --plies 6
+check "map needs --plies" 2 "--plies Q is required" -- "$bin" map "$work/m2.json"
+check "map rejects an impossible coil" 2 "spring index" -- "$bin" map "$work/m2.json" --plies 4 --coil-d 0.3 --coil-D 0.2 --coil-n 100
+check "simulate to stdout" 0 "# truth_effects: creep=0" -- "$bin" simulate "$src/examples/rig/pair-2ply.toml"
+
+# Bad input: located errors, exit 3, and outputs neither created nor clobbered.
+printf 'load_g,strain_pct\n20,0.1\n30,x1\n' >"$work/bad.csv"
+check "non-numeric cell" 3 "bad.csv:3:4: 'x1' is not a number" -- "$bin" fit "$work/bad.csv" -o "$work/new.json"
+assert "no output after a failed fit" test ! -e "$work/new.json"
+echo keep >"$work/keep.json"
+check "failed fit keeps the old output" 3 "bad.csv:3:4" -- "$bin" fit "$work/bad.csv" -o "$work/keep.json"
+assert "old output intact" grep -qx keep "$work/keep.json"
+assert "no temporary files left" test -z "$(find "$work" -name '.*.tmp-*')"
+printf 'load_g,strain_pct\n20,0.1\n30,0.2\n' >"$work/short.csv"
+check "too few rows" 3 "short.csv:1:8: cannot identify the model: 2 samples are too few" -- "$bin" fit "$work/short.csv"
+printf 'load_g,strain_pct\n20,0.1\n20,0.2\n20,0.3\n' >"$work/flat.csv"
+check "no excitation" 3 "flat.csv:1: no varying input" -- "$bin" fit "$work/flat.csv"
+printf 'load_lbs,strain_pct\n20,0.1\n' >"$work/unit.csv"
+check "unknown unit" 3 "unit.csv:1:1: unknown unit 'lbs'" -- "$bin" fit "$work/unit.csv"
+: >"$work/empty.csv"
+check "empty file" 3 "empty.csv:1: empty file" -- "$bin" fit "$work/empty.csv"
+check "missing file" 3 "nope.csv: cannot open" -- "$bin" fit "$work/nope.csv"
+check "predict with a broken model" 3 "bad.csv:.*not a JSON model file" -- "$bin" predict "$work/bad.csv" "$ex/pair-2ply.csv"
+printf 'specimen = "thread"\n[sensor]\nnosie_mm = 0.1\n' >"$work/typo.toml"
+check "rig typo" 3 "typo.toml:3:1: unknown key 'nosie_mm'" -- "$bin" simulate "$work/typo.toml"
+printf 'specimen = "thread"\n[effects]\ncreep = 3\n' >"$work/creep.toml"
+check "rig out of range" 3 "creep is a fraction" -- "$bin" simulate "$work/creep.toml"
+
+echo "$pass passed, $fail failed"
+[ "$fail" -eq 0 ]
