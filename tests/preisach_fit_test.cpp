@@ -41,6 +41,7 @@ TEST(PreisachFit, RecoversAKnownDensityFromNoiseFreeData) {
     PreisachFitOptions opt;
     opt.levels = L;
     opt.smoothness = 0.0;
+    opt.grid_shifts = 1;  // the truth's own grid
     opt.lo = 0.0;
     opt.hi = 1.0;
     const PreisachFit fit = fit_preisach(u, std::span<const double>(y.data(), y.size()), {}, opt);
@@ -63,6 +64,7 @@ TEST(PreisachFit, FallingResponseGetsNonPositiveDensities) {
   PreisachFitOptions opt;
   opt.levels = 6;
   opt.smoothness = 0.0;
+  opt.grid_shifts = 1;
   const PreisachFit fit = fit_preisach(u, std::span<const double>(y.data(), y.size()), {}, opt);
   EXPECT_EQ(fit.summary.sign, -1);
   EXPECT_LE(fit.model.weights().maxCoeff(), 0.0);
@@ -125,6 +127,7 @@ TEST(PreisachFit, ReportsUnexcitedCellsAndRefusesUnidentifiableData) {
   PreisachFitOptions opt;
   opt.levels = 8;
   opt.smoothness = 0.0;
+  opt.grid_shifts = 1;
   opt.lo = 0.0;
   opt.hi = 1.0;
   const PreisachFit fit = fit_preisach(u, std::span<const double>(y.data(), y.size()), {}, opt);

@@ -268,3 +268,35 @@ TEST(Preisach, CachedStepsAgreeWithAFreshEvaluationAcrossModels) {
 
 }  // namespace
 }  // namespace scpkit
+
+namespace scpkit {
+namespace {
+
+TEST(Preisach, AverageOfShiftedGridsIsOnePreisachOperator) {
+  std::mt19937 rng(22);
+  const int L = 6, S = 3;
+  const double lo = 0.0, hi = 1.2, h = (hi - lo) / L;
+  std::vector<PreisachModel> models;
+  for (int k = 0; k < S; ++k) {
+    const double lk = lo - k * h / S;
+    const int levels = L + (k > 0 ? 1 : 0);
+    models.push_back(random_model(rng, PreisachGrid{lk, lk + levels * h, levels}));
+  }
+  const PreisachGrid fine{lo - (S - 1) * h / S, lo + (L + 1) * h, (L + 1) * S + S - 1};
+  const PreisachModel mean = average_on_fine_grid(models, fine);
+  std::vector<PreisachState> states;
+  for (const auto& m : models) states.push_back(PreisachState::negative_saturation(m.grid()));
+  PreisachState fs = PreisachState::negative_saturation(fine);
+  std::uniform_real_distribution<double> U(lo, hi);
+  for (int t = 0; t < 400; ++t) {
+    const double u = U(rng);
+    double expect = 0.0;
+    for (int k = 0; k < S; ++k) expect += models[k].step(states[k], u) / S;
+    ASSERT_NEAR(mean.step(fs, u), expect, 1e-10);
+  }
+  EXPECT_THROW_MSG(average_on_fine_grid(models, PreisachGrid{lo + 0.01, hi, 7}), InvalidArgument,
+                   "not a node");
+}
+
+}  // namespace
+}  // namespace scpkit

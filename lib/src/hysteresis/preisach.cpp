@@ -205,6 +205,50 @@ PreisachModel PreisachModel::with_output_affine(double gain, double offset) cons
   return PreisachModel(grid_, weights_ * gain, bias_ * gain + offset);
 }
 
+PreisachModel average_on_fine_grid(std::span<const PreisachModel> models, const PreisachGrid& fine) {
+  fine.validate();
+  if (models.empty()) throw_invalid("average_on_fine_grid: no models");
+  const double hf = fine.step();
+  Eigen::VectorXd w = Eigen::VectorXd::Zero(fine.cells());
+  double bias = 0.0;
+  auto on_lattice = [&](double x, const char* what) {
+    const double t = (x - fine.lo) / hf;
+    const double r = std::round(t);
+    if (std::abs(t - r) > 1e-6 || r < -1e-9 || r > fine.levels + 1e-9) {
+      throw_invalid("average_on_fine_grid: {} {} is not a node of the fine grid", what, x);
+    }
+    return static_cast<int>(r);
+  };
+  for (const PreisachModel& m : models) {
+    const PreisachGrid& g = m.grid();
+    const int a0 = on_lattice(g.lo, "lo");
+    const int S = on_lattice(fine.lo + g.step(), "step") ;
+    if (S < 1 || std::abs(S * hf - g.step()) > 1e-9 * g.step()) {
+      throw_invalid("average_on_fine_grid: step {} is not a multiple of {}", g.step(), hf);
+    }
+    if (a0 + g.levels * S > fine.levels) throw_invalid("average_on_fine_grid: model reaches beyond the fine grid");
+    const double S2 = static_cast<double>(S) * S;
+    for (int i = 0; i < g.levels; ++i) {
+      for (int j = i; j < g.levels; ++j) {
+        const double mass = m.weights()[g.cell_index(i, j)];
+        if (mass == 0.0) continue;
+        for (int s = 0; s < S; ++s) {
+          for (int t = (i == j ? s : 0); t < S; ++t) {
+            const int fi = a0 + i * S + s, fj = a0 + j * S + t;
+            // Off-diagonal coarse cell: S^2 equal squares. Diagonal coarse triangle: squares
+            // of twice the mass of the S fine diagonal triangles.
+            const double share = i != j ? 1.0 / S2 : (s == t ? 1.0 / S2 : 2.0 / S2);
+            w[fine.cell_index(fi, fj)] += mass * share;
+          }
+        }
+      }
+    }
+    bias += m.bias();
+  }
+  const double n = static_cast<double>(models.size());
+  return PreisachModel(fine, w / n, bias / n);
+}
+
 // ---------------------------------------------------------------- regressor
 
 void signed_area_fractions(const PreisachGrid& grid, const PreisachState& state,

@@ -129,7 +129,8 @@ double kkt_violation(const Eigen::MatrixXd& G, const Eigen::VectorXd& f, const E
 }
 
 NnlsResult solve_nnls(const Eigen::MatrixXd& G, const Eigen::VectorXd& f,
-                      const std::vector<bool>& constrained, const NnlsOptions& options) {
+                      const std::vector<bool>& constrained, const NnlsOptions& options,
+                      const Eigen::VectorXd& warm_start) {
   const Eigen::Index n = f.size();
   if (G.rows() != n || G.cols() != n || static_cast<Eigen::Index>(constrained.size()) != n) {
     throw_invalid("NNLS: G is {}x{}, f has {}, mask has {}", G.rows(), G.cols(), n,
@@ -141,9 +142,13 @@ NnlsResult solve_nnls(const Eigen::MatrixXd& G, const Eigen::VectorXd& f,
   r.x = Eigen::VectorXd::Zero(n);
   Eigen::VectorXd& x = r.x;
 
-  // Phase 1: projected coordinate descent, keeping g = G x up to date.
+  // Phase 1: projected coordinate descent, keeping g = G x up to date (or a given start).
   Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
-  for (int sweep = 0; sweep < options.warm_start_sweeps; ++sweep) {
+  if (warm_start.size() == n) {
+    for (Eigen::Index i = 0; i < n; ++i) x[i] = constrained[i] ? std::max(warm_start[i], 0.0) : warm_start[i];
+  }
+  const int sweeps = warm_start.size() == n ? 0 : options.warm_start_sweeps;
+  for (int sweep = 0; sweep < sweeps; ++sweep) {
     double change = 0.0;
     for (Eigen::Index i = 0; i < n; ++i) {
       const double gii = G(i, i);

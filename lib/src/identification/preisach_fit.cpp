@@ -54,7 +54,7 @@ Eigen::MatrixXd smoothness_penalty(const PreisachGrid& grid) {
 
 Design make_design(const PreisachGrid& grid, int sign, std::span<const double> input,
                    std::span<const double> output, const std::vector<int>& block_of,
-                   int nblocks) {
+                   int nblocks, bool with_rank) {
   Design d;
   d.grid = grid;
   const auto n = static_cast<Eigen::Index>(input.size());
@@ -88,6 +88,7 @@ Design make_design(const PreisachGrid& grid, int sign, std::span<const double> i
     d.rhs[b] = Ab.transpose() * yb;
   }
   d.penalty = smoothness_penalty(grid);
+  if (!with_rank) return d;
   // Numerical rank of the regressor from the pivoted LDL' of its Gram matrix.
   Eigen::MatrixXd G = Eigen::MatrixXd::Zero(p + 1, p + 1);
   for (const auto& g : d.gram) G += g;
@@ -98,7 +99,8 @@ Design make_design(const PreisachGrid& grid, int sign, std::span<const double> i
 }
 
 // Fits on every block except `skip` (-1: all blocks).
-NnlsResult solve_design(const Design& d, double lambda, int skip, const NnlsOptions& nnls) {
+NnlsResult solve_design(const Design& d, double lambda, int skip, const NnlsOptions& nnls,
+                        const Eigen::VectorXd& warm = Eigen::VectorXd()) {
   const int p = d.grid.cells();
   Eigen::MatrixXd G = Eigen::MatrixXd::Zero(p + 1, p + 1);
   Eigen::VectorXd f = Eigen::VectorXd::Zero(p + 1);
@@ -115,7 +117,25 @@ NnlsResult solve_design(const Design& d, double lambda, int skip, const NnlsOpti
   G += lambda * d.penalty;
   std::vector<bool> constrained(static_cast<std::size_t>(p + 1), true);
   constrained[p] = false;
-  return solve_nnls(G, f, constrained, nnls);
+  return solve_nnls(G, f, constrained, nnls, warm);
+}
+
+// Grid k of S shifted grids: the base grid moved down by k h / S, one level longer for k > 0
+// so that every shifted grid still covers [lo, hi].
+PreisachGrid shifted_grid(const PreisachGrid& base, int L, int k, int S) {
+  const double h = (base.hi - base.lo) / L;
+  PreisachGrid g;
+  g.levels = L + (k > 0 ? 1 : 0);
+  g.lo = base.lo - k * h / S;
+  g.hi = g.lo + g.levels * h;
+  return g;
+}
+
+// The common fine grid of S shifted grids (step h / S).
+PreisachGrid fine_grid(const PreisachGrid& base, int L, int S) {
+  if (S == 1) return PreisachGrid{base.lo, base.hi, L};
+  const double h = (base.hi - base.lo) / L;
+  return PreisachGrid{base.lo - (S - 1) * h / S, base.lo + (L + 1) * h, (L + 1) * S + S - 1};
 }
 
 // Blocks that may be held out: those whose input range the other blocks cover, so that the
@@ -146,22 +166,45 @@ std::vector<char> heldout_eligible(std::span<const double> input, const std::vec
   return ok;
 }
 
-double heldout_rms_pct(const Design& d, double lambda, const std::vector<int>& block_of,
-                       const std::vector<char>& eligible, std::span<const double> output,
-                       double range, const NnlsOptions& nnls) {
-  double sum_sq = 0.0;
+// Pooled held-out RMS error (% of range) of the averaged shifted-grid model for every
+// smoothness in `lambdas` (ascending; each solve warm-starts from the previous one).
+std::vector<double> heldout_rms_pct(const std::vector<Design>& shifts,
+                                    const std::vector<double>& lambdas,
+                                    const std::vector<int>& block_of,
+                                    const std::vector<char>& eligible,
+                                    std::span<const double> output, double range,
+                                    const NnlsOptions& nnls) {
+  std::vector<double> sum_sq(lambdas.size(), 0.0);
   int count = 0;
-  for (std::size_t b = 0; b < d.gram.size(); ++b) {
-    if (d.rows[b] == 0 || !eligible[b]) continue;
-    const NnlsResult r = solve_design(d, lambda, static_cast<int>(b), nnls);
-    for (Eigen::Index t = 0; t < d.A.rows(); ++t) {
-      if (block_of[t] != static_cast<int>(b)) continue;
-      const double e = d.A.row(t).dot(r.x) - output[t];
-      sum_sq += e * e;
-      ++count;
+  const double S = static_cast<double>(shifts.size());
+  for (std::size_t b = 0; b < shifts.front().gram.size(); ++b) {
+    if (shifts.front().rows[b] == 0 || !eligible[b]) continue;
+    std::vector<Eigen::Index> rows;
+    for (Eigen::Index t = 0; t < shifts.front().A.rows(); ++t) {
+      if (block_of[t] == static_cast<int>(b)) rows.push_back(t);
+    }
+    count += static_cast<int>(rows.size());
+    std::vector<Eigen::VectorXd> warm(shifts.size());
+    for (std::size_t l = 0; l < lambdas.size(); ++l) {
+      Eigen::VectorXd pred = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(rows.size()));
+      for (std::size_t k = 0; k < shifts.size(); ++k) {
+        const NnlsResult r = solve_design(shifts[k], lambdas[l], static_cast<int>(b), nnls, warm[k]);
+        warm[k] = r.x;
+        for (std::size_t i = 0; i < rows.size(); ++i) {
+          pred[static_cast<Eigen::Index>(i)] += shifts[k].A.row(rows[i]).dot(r.x) / S;
+        }
+      }
+      for (std::size_t i = 0; i < rows.size(); ++i) {
+        const double e = pred[static_cast<Eigen::Index>(i)] - output[rows[i]];
+        sum_sq[l] += e * e;
+      }
     }
   }
-  return 100.0 * std::sqrt(sum_sq / std::max(count, 1)) / range;
+  std::vector<double> out(lambdas.size());
+  for (std::size_t l = 0; l < lambdas.size(); ++l) {
+    out[l] = 100.0 * std::sqrt(sum_sq[l] / std::max(count, 1)) / range;
+  }
+  return out;
 }
 
 }  // namespace
@@ -186,6 +229,7 @@ bool PreisachFitOptions::IsValid(std::string* why) const {
   if (sign < -1 || sign > 1) return fail("sign must be -1, 0 or +1");
   if (lo && hi && !(*lo < *hi)) return fail("lo must be below hi");
   if (folds < 2) return fail("cross-validation needs at least 2 folds");
+  if (grid_shifts < 1 || grid_shifts > 16) return fail("grid_shifts must be 1..16");
   return true;
 }
 
@@ -285,47 +329,67 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
   const std::vector<char> eligible = heldout_eligible(input, block_of, nblocks);
   summary.heldout_blocks = static_cast<int>(std::count(eligible.begin(), eligible.end(), 1));
 
-  PreisachGrid chosen = base;
+  const int S = options.grid_shifts;
+  auto designs_for = [&](int L, bool with_rank) {
+    std::vector<Design> shifts;
+    for (int k = 0; k < S; ++k) {
+      shifts.push_back(make_design(shifted_grid(base, L, k, S), sign, input, output, block_of,
+                                   nblocks, with_rank && k == 0));
+    }
+    return shifts;
+  };
+  std::sort(lambdas.begin(), lambdas.end());
+  int chosen_levels = levels.front();
   double chosen_lambda = lambdas.front();
   if (run_cv) {
     double best = std::numeric_limits<double>::infinity();
     for (int L : levels) {
-      PreisachGrid g = base;
-      g.levels = L;
-      const Design d = make_design(g, sign, input, output, block_of, nblocks);
+      std::vector<double> lams;
       for (double lam : lambdas) {
-        if (too_big(L, lam)) continue;
-        const double cv = heldout_rms_pct(d, lam, block_of, eligible, output, range, options.nnls);
-        summary.cross_validation.push_back({L, lam, cv});
-        // Prefer the simpler setting unless the gain is at least 1 % of the error.
-        if (cv < best * 0.99) {
-          best = cv;
-          chosen = g;
-          chosen_lambda = lam;
+        if (!too_big(L, lam)) lams.push_back(lam);
+      }
+      if (lams.empty()) continue;
+      const std::vector<double> cv = heldout_rms_pct(designs_for(L, false), lams, block_of, eligible,
+                                                     output, range, options.nnls);
+      for (std::size_t l = 0; l < lams.size(); ++l) {
+        summary.cross_validation.push_back({L, lams[l], cv[l]});
+        if (cv[l] < best) {
+          best = cv[l];
+          chosen_levels = L;
+          chosen_lambda = lams[l];
         }
       }
     }
     summary.cv_rms_pct_range = best;
-  } else {
-    chosen.levels = levels.front();
   }
 
-  const Design d = make_design(chosen, sign, input, output, block_of, nblocks);
-  const NnlsResult r = solve_design(d, chosen_lambda, -1, options.nnls);
-  const int p = chosen.cells();
-  Eigen::VectorXd weights = r.x.head(p) * static_cast<double>(sign);
-  PreisachModel model(chosen, weights, r.x[p]);
-
-  summary.levels = chosen.levels;
+  const std::vector<Design> shifts = designs_for(chosen_levels, true);
+  std::vector<PreisachModel> models;
+  Eigen::VectorXd fitted = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(n));
+  bool converged = true;
+  std::string message;
+  for (const Design& d : shifts) {
+    const NnlsResult r = solve_design(d, chosen_lambda, -1, options.nnls);
+    const int p = d.grid.cells();
+    models.emplace_back(d.grid, r.x.head(p) * static_cast<double>(sign), r.x[p]);
+    fitted += d.A * r.x / static_cast<double>(S);
+    converged = converged && r.converged;
+    summary.nnls_iterations += r.iterations;
+    summary.kkt_violation = std::max(summary.kkt_violation, r.kkt_violation);
+    if (message.empty() || !r.converged) message = r.message;
+  }
+  PreisachModel model = S == 1 ? models.front()
+                               : average_on_fine_grid(models, fine_grid(base, chosen_levels, S));
+  const Design& d = shifts.front();
+  const int p = d.grid.cells();
+  summary.levels = chosen_levels;
+  summary.grid_shifts = S;
   summary.smoothness = chosen_lambda;
   summary.cells = p;
   summary.unexcited_cells = d.unexcited;
   summary.unidentified_directions = p + 1 - d.rank;
-  summary.nnls_iterations = r.iterations;
-  summary.kkt_violation = r.kkt_violation;
-  summary.termination = r.converged ? PreisachFitSummary::Termination::kConverged
-                                    : PreisachFitSummary::Termination::kNoConvergence;
-  const Eigen::VectorXd fitted = d.A * r.x;
+  summary.termination = converged ? PreisachFitSummary::Termination::kConverged
+                                  : PreisachFitSummary::Termination::kNoConvergence;
   summary.train = error_metrics(output, std::span<const double>(fitted.data(), n));
   if (d.unexcited > 0) {
     summary.warnings.push_back(fmt::format(
@@ -340,21 +404,22 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
         "together share their mass arbitrarily{}",
         d.rank, p + 1, chosen_lambda > 0.0 ? ", resolved here by the smoothness term" : ""));
   }
-  if (!r.converged) summary.warnings.push_back(r.message);
-  summary.message = r.message;
+  if (!converged) summary.warnings.push_back(message);
+  summary.message = message;
   return {std::move(model), std::move(summary)};
 }
 
 std::string PreisachFitSummary::BriefReport() const {
   std::string s = fmt::format(
-      "Preisach fit: L = {} ({} cells, {} unexcited), smoothness {:g}, sign {:+d}, {}\n"
+      "Preisach fit: L = {}{} ({} cells, {} unexcited), smoothness {:g}, sign {:+d}, {}\n"
       "  identification: E_max {:.3f} %, E_RMS {:.3f} % of the response range",
-      levels, cells, unexcited_cells, smoothness, sign,
+      levels, grid_shifts > 1 ? fmt::format(", averaged over {} shifted grids", grid_shifts) : "",
+      cells, unexcited_cells, smoothness, sign,
       termination == Termination::kConverged ? "converged" : "NOT converged", train.max_pct_range,
       train.rms_pct_range);
   if (cv_rms_pct_range >= 0.0) {
     s += fmt::format(
-        "\n  cross-validated on {} of {} blocks (the rest cover the input extremes): held-out "
+        "\n  cross-validated: {} of {} blocks held out in turn (blocks holding an input extreme stay in training), held-out "
         "E_RMS {:.3f} % of range",
         heldout_blocks, folds_used, cv_rms_pct_range);
   }

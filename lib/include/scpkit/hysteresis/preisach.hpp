@@ -128,6 +128,13 @@ class PreisachModel {
   Eigen::MatrixXd colpre_;  // colpre_(J, i) = sum_{i'=i..J-1} w(i', J)
 };
 
+/// The mean of several Preisach operators, as one operator on a finer grid. Every model's
+/// grid nodes must be nodes of `fine` (same step divided by an integer, offsets on the fine
+/// node lattice); InvalidArgument otherwise. Exact for inputs inside every model's [lo, hi]:
+/// mean_k Gamma_k[u] = Gamma_fine[u] (a sum of Preisach operators is one, with the summed
+/// density). Used by the averaged shifted grids of the identification.
+PreisachModel average_on_fine_grid(std::span<const PreisachModel> models, const PreisachGrid& fine);
+
 /// Signed area fraction of every cell for a given memory (the identification regressor row),
 /// in [-1, 1]; row.size() must equal grid.cells(). O(L^2 + L * depth).
 void signed_area_fractions(const PreisachGrid& grid, const PreisachState& state,

@@ -32,9 +32,11 @@ struct NnlsResult {
   std::string message;
 };
 
-/// Solves the problem above. `constrained` has one entry per unknown.
+/// Solves the problem above. `constrained` has one entry per unknown. A non-empty
+/// `warm_start` (e.g. the answer for a nearby problem) replaces the coordinate-descent phase.
 NnlsResult solve_nnls(const Eigen::MatrixXd& G, const Eigen::VectorXd& f,
-                      const std::vector<bool>& constrained, const NnlsOptions& options = {});
+                      const std::vector<bool>& constrained, const NnlsOptions& options = {},
+                      const Eigen::VectorXd& warm_start = Eigen::VectorXd());
 
 /// Largest violation of the KKT conditions, scaled like the solver's tolerance (so a value
 /// below 1 means "optimal within tolerance").

@@ -11,8 +11,10 @@
 // of cell k. lambda = 0 is the papers' recipe. L and lambda are chosen by cross-validation
 // over blocks of the record (whole cycles or given segments, never random rows): each block is
 // predicted with the memory built from the *input* history, by a model fitted on the others.
-// Departures from the papers: the smoothness term and the cross-validated choice of L, see
-// docs/theory.md.
+// The model is the mean of fits on S grids shifted by h/S, which removes the dependence of
+// the answer on where the grid lines fall relative to the input's turning points.
+// Departures from the papers: the smoothness term, the shifted-grid average and the
+// cross-validated choice of L and lambda, see docs/theory.md.
 #include <optional>
 #include <span>
 #include <string>
@@ -26,9 +28,12 @@ namespace scpkit {
 
 struct PreisachFitOptions {
   int levels = 0;  ///< L; 0 = choose by cross-validation among candidate_levels
-  std::vector<int> candidate_levels = {6, 8, 10, 12, 15, 20, 25, 30};
+  std::vector<int> candidate_levels = {8, 12, 16, 20, 25, 30};
   double smoothness = -1.0;  ///< lambda; < 0 = choose by cross-validation
-  std::vector<double> candidate_smoothness = {0.0, 1e-6, 3e-6, 1e-5, 3e-5, 1e-4, 1e-3, 1e-2};
+  std::vector<double> candidate_smoothness = {0.0, 1e-6, 1e-5, 1e-4, 1e-3};
+  /// S: the model is the mean of S fits on grids shifted by h/S (averaged shifted grids,
+  /// the ASH idea of Scott 1985), one operator on the h/S grid. 1 = the papers' single grid.
+  int grid_shifts = 4;
   int sign = 0;                ///< +1: densities >= 0; -1: <= 0 (falling response); 0: from data
   std::optional<double> lo;    ///< lowest threshold; default: smallest input
   std::optional<double> hi;    ///< highest threshold; default: largest input
@@ -48,10 +53,11 @@ struct CrossValidationPoint {
 struct PreisachFitSummary {
   enum class Termination { kConverged, kNoConvergence };
   Termination termination = Termination::kConverged;
-  int levels = 0;
+  int levels = 0;       ///< L of each shifted grid (the model's own grid is finer when S > 1)
+  int grid_shifts = 1;  ///< S
   double smoothness = 0.0;
   int sign = 1;
-  int cells = 0;
+  int cells = 0;        ///< cells of one L grid
   int unexcited_cells = 0;      ///< cells whose signed area never changes in the data
   int unidentified_directions = 0;  ///< cells + 1 minus the rank of the regressor
   int nnls_iterations = 0;
