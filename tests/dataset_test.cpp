@@ -1,0 +1,62 @@
+// Real data nobody on this project made (../shared/datasets, read in place, never copied):
+// the SMA wire's first-order reversal curves, identified on segments 0,1,3,5,7,9 and predicted
+// on 2,4,6,8,10. The seeds' recipe (L = 10, NNLS + bias, one grid) gets 0.97 % RMS and
+// 3.8 % max of range there; the defaults must beat it. Skipped when the folder is absent.
+#include <gtest/gtest.h>
+
+#include <set>
+
+#include "scpkit/identification/preisach_fit.hpp"
+#include "scpkit/io/measurement.hpp"
+#include "test_support.hpp"
+
+namespace scpkit {
+namespace {
+
+struct Split {
+  std::vector<double> u, y;
+  std::vector<int> seg;
+};
+
+Split segments(const Measurement& m, const std::set<int>& keep) {
+  Split s;
+  const auto& u = select_input(m).values;
+  const auto& y = select_response(m).values;
+  const auto& g = m.find(Quantity::kSegment)->values;
+  for (std::size_t t = 0; t < u.size(); ++t) {
+    if (keep.count(static_cast<int>(g[t]))) {
+      s.u.push_back(u[t]);
+      s.y.push_back(y[t]);
+      s.seg.push_back(static_cast<int>(g[t]));
+    }
+  }
+  return s;
+}
+
+ErrorMetrics heldout(const PreisachModel& model, const Split& test) {
+  PreisachState s = PreisachState::negative_saturation(model.grid());
+  const Eigen::VectorXd p = model.simulate(s, test.u);
+  return error_metrics(test.y, std::span<const double>(p.data(), test.y.size()));
+}
+
+TEST(Datasets, SmaReversalCurvesHeldOutBeatTheSeedsRecipe) {
+  const auto dir = testing::shared_dir();
+  if (dir.empty()) GTEST_SKIP() << "../shared/datasets not found: skipping the real-data check";
+  const Measurement m = Measurement::read(dir / "datasets" / "sma-wire-forc.csv");
+  const Split train = segments(m, {0, 1, 3, 5, 7, 9}), test = segments(m, {2, 4, 6, 8, 10});
+
+  PreisachFitOptions seeds;  // the papers' recipe
+  seeds.levels = 10;
+  seeds.smoothness = 0.0;
+  seeds.grid_shifts = 1;
+  const ErrorMetrics e_seeds = heldout(fit_preisach(train.u, train.y, train.seg, seeds).model, test);
+  EXPECT_NEAR(e_seeds.rms_pct_range, 0.97, 0.01);  // reproduces the number quoted in the issue
+  EXPECT_NEAR(e_seeds.max_pct_range, 3.8, 0.05);
+
+  const ErrorMetrics e = heldout(fit_preisach(train.u, train.y, train.seg, PreisachFitOptions{}).model, test);
+  EXPECT_LT(e.rms_pct_range, 0.85);
+  EXPECT_LT(e.max_pct_range, 3.5);
+}
+
+}  // namespace
+}  // namespace scpkit
