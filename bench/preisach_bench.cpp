@@ -33,7 +33,8 @@ std::vector<double> test_like_input(std::size_t n, unsigned seed) {
   while (u.size() < n) {
     const double target = U(rng);
     const int steps = 2 + static_cast<int>(U(rng) * 8);
-    for (int k = 1; k <= steps && u.size() < n; ++k) u.push_back(prev + (target - prev) * k / steps);
+    for (int k = 1; k <= steps && u.size() < n; ++k)
+      u.push_back(prev + (target - prev) * k / steps);
     prev = target;
   }
   return u;

@@ -25,10 +25,12 @@ constexpr const char* kAbout =
     "the response range; mean |e| and its sigma in the response's units).";
 
 std::optional<CoilGeometry> coil_from_metadata(const Measurement& m) {
-  const auto d = m.meta_number("coil_d_mm"), D = m.meta_number("coil_D_mm"), n = m.meta_number("coil_n");
+  const auto d = m.meta_number("coil_d_mm"), D = m.meta_number("coil_D_mm"),
+             n = m.meta_number("coil_n");
   if (!d && !D && !n) return std::nullopt;
   if (!d || !D || !n) {
-    throw InputError(m.source(), 0, 0, "coil metadata needs all of coil_d_mm, coil_D_mm and coil_n");
+    throw InputError(m.source(), 0, 0,
+                     "coil metadata needs all of coil_d_mm, coil_D_mm and coil_n");
   }
   CoilGeometry c;
   c.wire_d_m = *d * 1e-3;
@@ -50,7 +52,8 @@ int run_fit(const std::vector<std::string>& args) {
   opt.add_options()("help,h", "show this help")(
       "model", po::value<std::string>()->default_value("preisach"),
       "model: preisach (gpi, linear, poly2, lonely: not in this version)")(
-      "output,o", po::value<std::string>(), "model file to write (default: DATA stem + .model.json)")(
+      "output,o", po::value<std::string>(),
+      "model file to write (default: DATA stem + .model.json)")(
       "input", po::value<std::string>()->default_value(""),
       "input quantity when several vary: load, voltage, power, temp")(
       "response", po::value<std::string>()->default_value(""),
@@ -60,19 +63,27 @@ int run_fit(const std::vector<std::string>& args) {
       "smoothness weight lambda >= 0 (negative: cross-validate)")(
       "sign", po::value<std::string>()->default_value("auto"),
       "density sign: +1 (rising response), -1 (falling), auto")(
-      "lo", po::value<double>(), "lowest threshold, in the input column's units (default: data min)")(
-      "hi", po::value<double>(), "highest threshold, in the input column's units (default: data max)")(
-      "folds", po::value<int>()->default_value(5), "cross-validation blocks without a segment column")(
+      "lo", po::value<double>(),
+      "lowest threshold, in the input column's units (default: data min)")(
+      "hi", po::value<double>(),
+      "highest threshold, in the input column's units (default: data max)")(
+      "folds", po::value<int>()->default_value(5),
+      "cross-validation blocks without a segment column")(
+      "grid-shifts", po::value<int>()->default_value(4),
+      "average of S grids shifted by h/S (1 = one grid, the papers' recipe)")(
       "json", "print one JSON object instead of the report");
   po::variables_map vm;
   if (!parse_command_line(args, kUsage, kAbout, opt, {"DATA"}, vm)) return kOk;
 
   const std::string model_kind = vm["model"].as<std::string>();
   if (model_kind != "preisach") {
-    if (model_kind == "gpi" || model_kind == "linear" || model_kind == "poly2" || model_kind == "lonely") {
-      throw UsageError(fmt::format("model '{}' is not available in this version of scpkit (only preisach)", model_kind));
+    if (model_kind == "gpi" || model_kind == "linear" || model_kind == "poly2" ||
+        model_kind == "lonely") {
+      throw UsageError(fmt::format(
+          "model '{}' is not available in this version of scpkit (only preisach)", model_kind));
     }
-    throw UsageError(fmt::format("unknown model '{}' (preisach, gpi, linear, poly2, lonely)", model_kind));
+    throw UsageError(
+        fmt::format("unknown model '{}' (preisach, gpi, linear, poly2, lonely)", model_kind));
   }
   const std::string data_path = vm["DATA"].as<std::string>();
   const Measurement m = Measurement::read(data_path);
@@ -86,6 +97,7 @@ int run_fit(const std::vector<std::string>& args) {
   fo.levels = vm["levels"].as<int>();
   fo.smoothness = vm["smoothness"].as<double>();
   fo.folds = vm["folds"].as<int>();
+  fo.grid_shifts = vm["grid-shifts"].as<int>();
   const std::string sign = vm["sign"].as<std::string>();
   if (sign == "auto") {
     fo.sign = 0;
@@ -133,7 +145,8 @@ int run_fit(const std::vector<std::string>& args) {
   mf.data_file = data_path;
   if (paired) {
     try {
-      mf.scp_gain = fit_scp_gain(m.find(Quantity::kThreadStrain)->values, m.find(Quantity::kScpStrain)->values);
+      mf.scp_gain = fit_scp_gain(m.find(Quantity::kThreadStrain)->values,
+                                 m.find(Quantity::kScpStrain)->values);
     } catch (const IdentificationError& e) {
       rethrow_at_column(m, m.find(Quantity::kScpStrain)->name, e.what());
     }
@@ -153,6 +166,7 @@ int run_fit(const std::vector<std::string>& args) {
     j["response_unit"] = unit;
     j["levels"] = fit.summary.levels;
     j["smoothness"] = fit.summary.smoothness;
+    j["grid_shifts"] = fit.summary.grid_shifts;
     j["sign"] = fit.summary.sign;
     j["unexcited_cells"] = fit.summary.unexcited_cells;
     j["unidentified_directions"] = fit.summary.unidentified_directions;
@@ -161,11 +175,14 @@ int run_fit(const std::vector<std::string>& args) {
     j["warnings"] = fit.summary.warnings;
     nlohmann::json cv = nlohmann::json::array();
     for (const auto& p : fit.summary.cross_validation) {
-      cv.push_back({{"levels", p.levels}, {"smoothness", p.smoothness}, {"rms_pct_range", p.rms_pct_range}});
+      cv.push_back(
+          {{"levels", p.levels}, {"smoothness", p.smoothness}, {"rms_pct_range", p.rms_pct_range}});
     }
     j["cross_validation"] = cv;
     if (mf.scp_gain) {
-      j["scp_gain"] = {{"gain", mf.scp_gain->gain}, {"offset_pct", 100.0 * mf.scp_gain->offset}, {"r2", mf.scp_gain->r2}};
+      j["scp_gain"] = {{"gain", mf.scp_gain->gain},
+                       {"offset_pct", 100.0 * mf.scp_gain->offset},
+                       {"r2", mf.scp_gain->r2}};
     }
     print_json(j);
   } else {
@@ -174,8 +191,9 @@ int run_fit(const std::vector<std::string>& args) {
     std::cout << fit.summary.BriefReport() << "\n";
     std::cout << fmt::format("  errors: {}\n", mf.fit_metrics.brief(unit));
     if (mf.scp_gain) {
-      std::cout << fmt::format("  SCP gain: scp = {:.4f} * thread {:+.4f} strain-%  (R^2 {:.5f}, {} pairs)\n",
-                               mf.scp_gain->gain, 100.0 * mf.scp_gain->offset, mf.scp_gain->r2, mf.scp_gain->samples);
+      std::cout << fmt::format(
+          "  SCP gain: scp = {:.4f} * thread {:+.4f} strain-%  (R^2 {:.5f}, {} pairs)\n",
+          mf.scp_gain->gain, 100.0 * mf.scp_gain->offset, mf.scp_gain->r2, mf.scp_gain->samples);
     }
     std::cout << "model written to " << model_path << "\n";
   }

@@ -41,7 +41,8 @@ struct Prediction {
 
 int run_map(const std::vector<std::string>& args) {
   po::options_description opt("options");
-  opt.add_options()("help,h", "show this help")("plies,q", po::value<int>(), "target ply count Q (required)")(
+  opt.add_options()("help,h", "show this help")("plies,q", po::value<int>(),
+                                                "target ply count Q (required)")(
       "from-plies", po::value<int>(), "ply count P of the model (default: from the model file)")(
       "coil-d", po::value<double>(), "target SCP wire diameter d, mm")(
       "coil-D", po::value<double>(), "target SCP MEAN coil diameter D, mm")(
@@ -57,7 +58,8 @@ int run_map(const std::vector<std::string>& args) {
   const ModelFile mf = load_model(vm["MODEL"].as<std::string>());
   if (mf.input != "load_N" || mf.response != "strain") {
     throw InputError(vm["MODEL"].as<std::string>(), 0, 0,
-                     fmt::format("map needs a load -> strain thread model, this one is {} -> {}", mf.input, mf.response));
+                     fmt::format("map needs a load -> strain thread model, this one is {} -> {}",
+                                 mf.input, mf.response));
   }
   const int q = vm["plies"].as<int>();
   const int p = vm.count("from-plies") ? vm["from-plies"].as<int>() : mf.specimen.plies;
@@ -65,7 +67,8 @@ int run_map(const std::vector<std::string>& args) {
   if (q < 1) throw UsageError("--plies must be >= 1");
 
   std::optional<Material> material;
-  const std::string material_id = vm.count("material") ? vm["material"].as<std::string>() : mf.specimen.material;
+  const std::string material_id =
+      vm.count("material") ? vm["material"].as<std::string>() : mf.specimen.material;
   if (!material_id.empty()) material = find_material(material_id);
 
   // Coils: the model's own (or the card's) for p; flags (or the card's) for q.
@@ -105,8 +108,9 @@ int run_map(const std::vector<std::string>& args) {
     preds.push_back({"scp", map_thread_to_scp(thread_p, p, *mf.scp_gain, q, gain_q->value)});
     // Paper as printed: eps_SCP,q = (K_SCP,q / K_SCP,p) eps_SCP,p at equal load.
     const double ratio = spring_stiffness(1.0, *coil_q) / spring_stiffness(1.0, *coil_p);
-    preds.push_back({"scp_paper_eq8_as_printed",
-                     thread_p.with_output_affine(mf.scp_gain->gain * ratio, mf.scp_gain->offset * ratio)});
+    preds.push_back(
+        {"scp_paper_eq8_as_printed",
+         thread_p.with_output_affine(mf.scp_gain->gain * ratio, mf.scp_gain->offset * ratio)});
   }
 
   // Loads: the comparison file's, else the major loop over the scaled identified range.
@@ -143,7 +147,9 @@ int run_map(const std::vector<std::string>& args) {
     std::optional<std::vector<double>> scp_meas = series(Quantity::kScpStrain);
     if (!thread_meas && !scp_meas) {
       const Signal r = select_response(*data, "");
-      if (r.name != "strain") throw InputError(data->source(), data->header_line(), 0, "the comparison data need strain (or disp_mm with length_mm)");
+      if (r.name != "strain")
+        throw InputError(data->source(), data->header_line(), 0,
+                         "the comparison data need strain (or disp_mm with length_mm)");
       const std::string specimen = data->meta("specimen").value_or("thread");
       (specimen == "scp" ? scp_meas : thread_meas) = r.values;
     }
@@ -154,7 +160,8 @@ int run_map(const std::vector<std::string>& args) {
       if (!meas) continue;
       std::vector<double> pct(meas->size());
       for (std::size_t i = 0; i < pct.size(); ++i) pct[i] = 100.0 * (*meas)[i];
-      compared.push_back({preds[k].label, k, error_metrics(pct, std::span<const double>(out[k].data(), pct.size()))});
+      compared.push_back({preds[k].label, k,
+                          error_metrics(pct, std::span<const double>(out[k].data(), pct.size()))});
     }
   }
 
@@ -184,13 +191,15 @@ int run_map(const std::vector<std::string>& args) {
     j["to_plies"] = q;
     j["input_scale"] = static_cast<double>(p) / q;
     if (scp) {
-      j["stiffness_ratio_p_over_q"] = spring_stiffness(1.0, *coil_p) / spring_stiffness(1.0, *coil_q);
+      j["stiffness_ratio_p_over_q"] =
+          spring_stiffness(1.0, *coil_p) / spring_stiffness(1.0, *coil_q);
       j["gain_p"] = mf.scp_gain->gain;
       j["gain_q"] = {{"value", gain_q->value}, {"sigma", gain_q->sigma}};
       j["gain_q_paper_eq8_as_printed"] = gain_q_paper;
       if (!coil_q->caution().empty()) j["caution"] = coil_q->caution();
     }
-    if (measured_gain) j["gain_q_measured"] = {{"value", measured_gain->gain}, {"r2", measured_gain->r2}};
+    if (measured_gain)
+      j["gain_q_measured"] = {{"value", measured_gain->gain}, {"r2", measured_gain->r2}};
     nlohmann::json cmp = nlohmann::json::object();
     for (const auto& c : compared) cmp[c.label] = metrics_json(c.err);
     j["errors"] = cmp;
@@ -199,35 +208,43 @@ int run_map(const std::vector<std::string>& args) {
     return kOk;
   }
 
-  std::cout << fmt::format("map: {}-ply thread model -> {} plies (per-ply load scaling {:.4g})\n", p, q,
-                           static_cast<double>(p) / q);
+  std::cout << fmt::format("map: {}-ply thread model -> {} plies (per-ply load scaling {:.4g})\n",
+                           p, q, static_cast<double>(p) / q);
   if (scp) {
     const Uncertain ratio = stiffness_ratio(*coil_p, *coil_q, tol);
     std::cout << fmt::format(
-        "  coil {}-ply: d {:.3g} mm, D {:.3g} mm (mean), n {:g}, {} legs;  coil {}-ply: d {:.3g} mm, D {:.3g} mm, n {:g}, {} legs\n",
+        "  coil {}-ply: d {:.3g} mm, D {:.3g} mm (mean), n {:g}, {} legs;  coil {}-ply: d {:.3g} "
+        "mm, D {:.3g} mm, n {:g}, {} legs\n",
         p, coil_p->wire_d_m * 1e3, coil_p->mean_D_m * 1e3, coil_p->coils, coil_p->legs, q,
         coil_q->wire_d_m * 1e3, coil_q->mean_D_m * 1e3, coil_q->coils, coil_q->legs);
-    std::cout << fmt::format("  K_SCP,{} / K_SCP,{} = {:.4f} +- {:.4f}\n", p, q, ratio.value, ratio.sigma);
-    std::cout << fmt::format("  SCP gain: g_{} = {:.4f} (fitted)  ->  g_{} = {:.4f} +- {:.4f} (corrected Eq. 8)", p,
-                             mf.scp_gain->gain, q, gain_q->value, gain_q->sigma);
+    std::cout << fmt::format("  K_SCP,{} / K_SCP,{} = {:.4f} +- {:.4f}\n", p, q, ratio.value,
+                             ratio.sigma);
+    std::cout << fmt::format(
+        "  SCP gain: g_{} = {:.4f} (fitted)  ->  g_{} = {:.4f} +- {:.4f} (corrected Eq. 8)", p,
+        mf.scp_gain->gain, q, gain_q->value, gain_q->sigma);
     std::cout << fmt::format("   [paper Eq. 8 as printed: {:.4f}]\n", gain_q_paper);
     if (measured_gain) {
-      std::cout << fmt::format("  measured g_{} = {:.4f} (R^2 {:.5f}): corrected {:+.1f} %, as printed {:+.1f} %\n", q,
-                               measured_gain->gain, measured_gain->r2,
-                               100.0 * (gain_q->value / measured_gain->gain - 1.0),
-                               100.0 * (gain_q_paper / measured_gain->gain - 1.0));
+      std::cout << fmt::format(
+          "  measured g_{} = {:.4f} (R^2 {:.5f}): corrected {:+.1f} %, as printed {:+.1f} %\n", q,
+          measured_gain->gain, measured_gain->r2,
+          100.0 * (gain_q->value / measured_gain->gain - 1.0),
+          100.0 * (gain_q_paper / measured_gain->gain - 1.0));
     }
     if (!coil_q->caution().empty()) std::cout << "  caution: " << coil_q->caution() << "\n";
   } else {
-    std::cout << "  (no SCP prediction: needs a paired thread/SCP model and both coil geometries)\n";
+    std::cout
+        << "  (no SCP prediction: needs a paired thread/SCP model and both coil geometries)\n";
   }
   if (compared.empty()) {
     const auto& t = out[0];
-    std::cout << fmt::format("  predicted {}-ply thread major loop: strain {:.3f} .. {:.3f} % over {:.4g} .. {:.4g} g\n", q,
-                             t.minCoeff(), t.maxCoeff(), load_N.front() / kGram, load_N[20] / kGram);
+    std::cout << fmt::format(
+        "  predicted {}-ply thread major loop: strain {:.3f} .. {:.3f} % over {:.4g} .. {:.4g} g\n",
+        q, t.minCoeff(), t.maxCoeff(), load_N.front() / kGram, load_N[20] / kGram);
     if (scp) {
-      std::cout << fmt::format("  predicted {}-ply SCP major loop: strain {:.2f} .. {:.2f} % (+- {:.0f} % from coil tolerances)\n",
-                               q, out[2].minCoeff(), out[2].maxCoeff(), 100.0 * gain_q->relative());
+      std::cout << fmt::format(
+          "  predicted {}-ply SCP major loop: strain {:.2f} .. {:.2f} % (+- {:.0f} % from coil "
+          "tolerances)\n",
+          q, out[2].minCoeff(), out[2].maxCoeff(), 100.0 * gain_q->relative());
     }
   } else {
     std::cout << fmt::format("  against {} ({} readings):\n", data->source(), load_N.size());
@@ -235,7 +252,8 @@ int run_map(const std::vector<std::string>& args) {
       std::cout << fmt::format("    {:<28} {}\n", c.label, c.err.brief("strain-%"));
     }
   }
-  if (vm.count("output")) std::cout << "  predictions written to " << vm["output"].as<std::string>() << "\n";
+  if (vm.count("output"))
+    std::cout << "  predictions written to " << vm["output"].as<std::string>() << "\n";
   return kOk;
 }
 

@@ -25,7 +25,8 @@ constexpr const char* kAbout =
 
 int run_predict(const std::vector<std::string>& args) {
   po::options_description opt("options");
-  opt.add_options()("help,h", "show this help")("output,o", po::value<std::string>(), "CSV to write")(
+  opt.add_options()("help,h", "show this help")("output,o", po::value<std::string>(),
+                                                "CSV to write")(
       "json", "print one JSON object (metrics) instead of the report");
   po::variables_map vm;
   if (!parse_command_line(args, kUsage, kAbout, opt, {"MODEL", "DATA"}, vm)) return kOk;
@@ -53,9 +54,11 @@ int run_predict(const std::vector<std::string>& args) {
         if (c.name == measured->column) out_col = &c;
       }
       if (measured->name != mf.response) {
-        throw InputError(m.source(), m.header_line(), 0,
-                         fmt::format("the model predicts {} but the file's response is {} (give length_mm metadata?)",
-                                     mf.response, measured->name));
+        throw InputError(
+            m.source(), m.header_line(), 0,
+            fmt::format(
+                "the model predicts {} but the file's response is {} (give length_mm metadata?)",
+                mf.response, measured->name));
       }
     } catch (const InputError& e) {
       if (e.message().find("no response column") == std::string::npos) throw;
@@ -68,7 +71,8 @@ int run_predict(const std::vector<std::string>& args) {
   if (out_col) {
     predicted_name = "predicted_" + out_col->name;
     for (std::size_t r = 0; r < m.rows(); ++r) {
-      predicted_col[r] = to_column_units(y[static_cast<Eigen::Index>(r)], *out_col, length_mm, mf.response);
+      predicted_col[r] =
+          to_column_units(y[static_cast<Eigen::Index>(r)], *out_col, length_mm, mf.response);
     }
   } else {
     predicted_name = mf.response == "strain" ? "predicted_strain_pct" : "predicted_disp_mm";
@@ -88,7 +92,8 @@ int run_predict(const std::vector<std::string>& args) {
 
   std::optional<ErrorMetrics> err;
   if (measured) {
-    err = error_metrics(measured->values, std::span<const double>(y.data(), static_cast<std::size_t>(y.size())))
+    err = error_metrics(measured->values,
+                        std::span<const double>(y.data(), static_cast<std::size_t>(y.size())))
               .scaled(display_scale(mf.response));
   }
   if (vm.count("json")) {
@@ -105,9 +110,11 @@ int run_predict(const std::vector<std::string>& args) {
     // The report goes to stdout only when stdout does not carry the CSV.
     std::ostream& report = vm.count("output") ? std::cout : std::cerr;
     if (err) {
-      report << fmt::format("{}: {} rows; {}\n", m.source(), m.rows(), err->brief(display_unit(mf.response)));
+      report << fmt::format("{}: {} rows; {}\n", m.source(), m.rows(),
+                            err->brief(display_unit(mf.response)));
     }
-    if (vm.count("output")) report << "predictions written to " << vm["output"].as<std::string>() << "\n";
+    if (vm.count("output"))
+      report << "predictions written to " << vm["output"].as<std::string>() << "\n";
   }
   return kOk;
 }

@@ -25,8 +25,9 @@ constexpr const char* kAbout =
 
 int run_simulate(const std::vector<std::string>& args) {
   po::options_description opt("options");
-  opt.add_options()("help,h", "show this help")("output,o", po::value<std::string>(), "CSV to write")(
-      "seed", po::value<long long>(), "override the spec's seed")(
+  opt.add_options()("help,h", "show this help")("output,o", po::value<std::string>(),
+                                                "CSV to write")("seed", po::value<long long>(),
+                                                                "override the spec's seed")(
       "json", "print a JSON summary on stdout (requires -o)");
   po::variables_map vm;
   if (!parse_command_line(args, kUsage, kAbout, opt, {"RIG"}, vm)) return kOk;
@@ -35,7 +36,8 @@ int run_simulate(const std::vector<std::string>& args) {
     if (vm["seed"].as<long long>() < 0) throw UsageError("--seed must be >= 0");
     spec.seed = static_cast<std::uint64_t>(vm["seed"].as<long long>());
   }
-  if (vm.count("json") && !vm.count("output")) throw UsageError("--json needs -o (stdout holds the JSON)");
+  if (vm.count("json") && !vm.count("output"))
+    throw UsageError("--json needs -o (stdout holds the JSON)");
   const Material material = find_material(spec.material);
   const RigRun run = run_rig(spec, material);
   const std::string csv = run.to_csv();
@@ -47,7 +49,8 @@ int run_simulate(const std::vector<std::string>& args) {
                   {"truth_gain", run.true_gain},
                   {"metadata", run.metadata}});
     } else {
-      std::cout << fmt::format("{} readings written to {}\n", run.rows.size(), vm["output"].as<std::string>());
+      std::cout << fmt::format("{} readings written to {}\n", run.rows.size(),
+                               vm["output"].as<std::string>());
     }
   } else {
     std::cout << csv;

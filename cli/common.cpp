@@ -35,9 +35,12 @@ bool parse_command_line(const std::vector<std::string>& args, const char* usage,
 }
 
 nlohmann::json metrics_json(const ErrorMetrics& m) {
-  return {{"rms_pct_range", m.rms_pct_range}, {"max_pct_range", m.max_pct_range},
-          {"mean_abs", m.mean_abs},           {"sd_abs", m.sd_abs},
-          {"range", m.range},                 {"count", m.count}};
+  return {{"rms_pct_range", m.rms_pct_range},
+          {"max_pct_range", m.max_pct_range},
+          {"mean_abs", m.mean_abs},
+          {"sd_abs", m.sd_abs},
+          {"range", m.range},
+          {"count", m.count}};
 }
 
 void print_json(const nlohmann::json& j) { std::cout << j.dump(2) << std::endl; }
@@ -52,7 +55,8 @@ double to_column_units(double canonical, const MeasurementColumn& column, double
 
 std::string csv_number(double v) { return fmt::format("{:.8g}", v); }
 
-void rethrow_at_column(const Measurement& m, const std::string& column, const std::string& message) {
+void rethrow_at_column(const Measurement& m, const std::string& column,
+                       const std::string& message) {
   for (const auto& c : m.columns()) {
     if (c.name == column) m.fail_at_column(c, message);
   }

@@ -2,7 +2,6 @@
 // Shared pieces of the scpkit subcommands: option parsing, exit codes, output.
 #include <boost/program_options.hpp>
 #include <nlohmann/json.hpp>
-
 #include <string>
 #include <vector>
 

@@ -18,8 +18,10 @@ using scpkit::cli::Command;
 const std::vector<Command>& commands() {
   static const std::vector<Command> list = {
       {"fit", "identify a hysteresis model from a measurement file", scpkit::cli::run_fit},
-      {"predict", "run a model on an input sequence; errors when the response is measured", scpkit::cli::run_predict},
-      {"map", "map a thread model to another ply count and to an SCP actuator", scpkit::cli::run_map},
+      {"predict", "run a model on an input sequence; errors when the response is measured",
+       scpkit::cli::run_predict},
+      {"map", "map a thread model to another ply count and to an SCP actuator",
+       scpkit::cli::run_map},
       {"simulate", "synthetic measurements from the virtual test rig", scpkit::cli::run_simulate},
   };
   return list;
@@ -30,9 +32,10 @@ void print_help() {
             << ": hysteresis of supercoiled polymer (SCP) artificial muscles\n\n"
                "usage: scpkit COMMAND [ARGS] [--help]\n\ncommands:\n";
   for (const auto& c : commands()) std::cout << fmt::format("  {:<10} {}\n", c.name, c.summary);
-  std::cout << "\nscpkit COMMAND --help explains each command. Exit codes: 0 ok, 1 internal error,\n"
-               "2 usage error, 3 bad input data (the message names file:line:column).\n"
-               "Documentation: docs/cli.md, docs/data-format.md, docs/theory.md.\n";
+  std::cout
+      << "\nscpkit COMMAND --help explains each command. Exit codes: 0 ok, 1 internal error,\n"
+         "2 usage error, 3 bad input data (the message names file:line:column).\n"
+         "Documentation: docs/cli.md, docs/data-format.md, docs/theory.md.\n";
 }
 
 }  // namespace
@@ -55,7 +58,8 @@ int main(int argc, char** argv) {
     try {
       return c.run(args);
     } catch (const UsageError& e) {
-      std::cerr << "scpkit " << name << ": " << e.what() << "\n(see scpkit " << name << " --help)\n";
+      std::cerr << "scpkit " << name << ": " << e.what() << "\n(see scpkit " << name
+                << " --help)\n";
       return kUsageError;
     } catch (const scpkit::InputError& e) {
       std::cerr << "scpkit " << name << ": error: " << e.what() << "\n";

@@ -66,6 +66,10 @@ assert "map csv has the band" grep -q "scp_band_lo_strain_pct" "$work/map4.csv"
 check "map without data" 0 "predicted 6-ply SCP major loop" -- "$bin" map "$work/m2.json" --plies 6
 check "map needs --plies" 2 "--plies Q is required" -- "$bin" map "$work/m2.json"
 check "map rejects an impossible coil" 2 "spring index" -- "$bin" map "$work/m2.json" --plies 4 --coil-d 0.3 --coil-D 0.2 --coil-n 100
+for p in 2 4 6; do
+  "$bin" simulate "$src/examples/rig/pair-${p}ply.toml" -o "$work/pair-${p}ply.csv" >/dev/null
+  assert "example data $p-ply regenerate byte for byte" cmp -s "$work/pair-${p}ply.csv" "$ex/pair-${p}ply.csv"
+done
 check "simulate to stdout" 0 "# truth_effects: creep=0" -- "$bin" simulate "$src/examples/rig/pair-2ply.toml"
 
 # Bad input: located errors, exit 3, and outputs neither created nor clobbered.

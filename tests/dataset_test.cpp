@@ -49,11 +49,13 @@ TEST(Datasets, SmaReversalCurvesHeldOutBeatTheSeedsRecipe) {
   seeds.levels = 10;
   seeds.smoothness = 0.0;
   seeds.grid_shifts = 1;
-  const ErrorMetrics e_seeds = heldout(fit_preisach(train.u, train.y, train.seg, seeds).model, test);
+  const ErrorMetrics e_seeds =
+      heldout(fit_preisach(train.u, train.y, train.seg, seeds).model, test);
   EXPECT_NEAR(e_seeds.rms_pct_range, 0.97, 0.01);  // reproduces the number quoted in the issue
   EXPECT_NEAR(e_seeds.max_pct_range, 3.8, 0.05);
 
-  const ErrorMetrics e = heldout(fit_preisach(train.u, train.y, train.seg, PreisachFitOptions{}).model, test);
+  const ErrorMetrics e =
+      heldout(fit_preisach(train.u, train.y, train.seg, PreisachFitOptions{}).model, test);
   EXPECT_LT(e.rms_pct_range, 0.85);
   EXPECT_LT(e.max_pct_range, 3.5);
 }

@@ -51,12 +51,14 @@ TEST(Measurement, DisplacementWithoutLengthStaysInMillimetres) {
 TEST(Measurement, EveryBadInputNamesFileLineAndColumn) {
   EXPECT_THROW_MSG(Measurement::parse("", "e.csv"), InputError, "e.csv:1: empty file");
   EXPECT_THROW_MSG(Measurement::parse("# only: metadata\n", "e.csv"), InputError, "no header");
-  EXPECT_THROW_MSG(Measurement::parse("load_g,strain_pct\n", "e.csv"), InputError, "e.csv:1: no data rows");
+  EXPECT_THROW_MSG(Measurement::parse("load_g,strain_pct\n", "e.csv"), InputError,
+                   "e.csv:1: no data rows");
   EXPECT_THROW_MSG(Measurement::parse("load_g,strain_pct\n1,2\n3,abc\n", "e.csv"), InputError,
                    "e.csv:3:3: 'abc' is not a number (column 'strain_pct')");
   EXPECT_THROW_MSG(Measurement::parse("load_g,strain_pct\n1,nan\n", "e.csv"), InputError,
                    "e.csv:2:3: 'nan' is not a finite number");
-  EXPECT_THROW_MSG(Measurement::parse("load_g,strain_pct\n1,inf\n", "e.csv"), InputError, "not a finite");
+  EXPECT_THROW_MSG(Measurement::parse("load_g,strain_pct\n1,inf\n", "e.csv"), InputError,
+                   "not a finite");
   EXPECT_THROW_MSG(Measurement::parse("load_g,strain_pct\n1\n", "e.csv"), InputError,
                    "e.csv:2:2: 1 fields, the header has 2");
   EXPECT_THROW_MSG(Measurement::parse("load_g,strain_pct\n1,2,3\n", "e.csv"), InputError,
@@ -67,17 +69,22 @@ TEST(Measurement, EveryBadInputNamesFileLineAndColumn) {
                    "e.csv:1:1: unknown unit 'lb' in column 'load_lb'");
   EXPECT_THROW_MSG(Measurement::parse("load_g,load_N,strain\n1,2,3\n", "e.csv"), InputError,
                    "e.csv:1:8: a second load column");
-  EXPECT_THROW_MSG(Measurement::parse("load_g,load_g\n1,2\n", "e.csv"), InputError, "appears twice");
-  EXPECT_THROW_MSG(Measurement::parse("voltage_V,segment\n1,0.5\n", "e.csv"), InputError, "not an integer");
+  EXPECT_THROW_MSG(Measurement::parse("load_g,load_g\n1,2\n", "e.csv"), InputError,
+                   "appears twice");
+  EXPECT_THROW_MSG(Measurement::parse("voltage_V,segment\n1,0.5\n", "e.csv"), InputError,
+                   "not an integer");
   const Measurement m = Measurement::parse("# plies: two\nload_g,strain\n1,2\n", "e.csv");
-  EXPECT_THROW_MSG(m.meta_positive_int("plies"), InputError, "e.csv:1: metadata 'plies' must be a number");
+  EXPECT_THROW_MSG(m.meta_positive_int("plies"), InputError,
+                   "e.csv:1: metadata 'plies' must be a number");
   EXPECT_THROW_MSG(select_response(Measurement::parse("load_g,time_s\n1,2\n", "e.csv")), InputError,
                    "no response column");
-  EXPECT_THROW_MSG(select_input(Measurement::parse("load_g,voltage_V,strain\n1,2,3\n2,3,4\n", "e.csv")),
-                   InputError, "several inputs vary");
-  EXPECT_THROW_MSG(select_input(Measurement::parse("load_g,strain\n1,2\n1,3\n", "e.csv")), InputError,
-                   "no varying input");
-  EXPECT_THROW_MSG(Measurement::read("/nonexistent/x.csv"), InputError, "/nonexistent/x.csv: cannot open");
+  EXPECT_THROW_MSG(
+      select_input(Measurement::parse("load_g,voltage_V,strain\n1,2,3\n2,3,4\n", "e.csv")),
+      InputError, "several inputs vary");
+  EXPECT_THROW_MSG(select_input(Measurement::parse("load_g,strain\n1,2\n1,3\n", "e.csv")),
+                   InputError, "no varying input");
+  EXPECT_THROW_MSG(Measurement::read("/nonexistent/x.csv"), InputError,
+                   "/nonexistent/x.csv: cannot open");
 }
 
 TEST(AtomicFile, WritesWholeFilesAndLeavesNoTemporaries) {
@@ -86,7 +93,8 @@ TEST(AtomicFile, WritesWholeFilesAndLeavesNoTemporaries) {
   write_file_atomically(f, "first\n");
   write_file_atomically(f, "second\n");
   EXPECT_EQ(read_text_file(f), "second\n");
-  EXPECT_THROW_MSG(write_file_atomically(d / "missing" / "x.txt", "y"), InputError, "missing/x.txt");
+  EXPECT_THROW_MSG(write_file_atomically(d / "missing" / "x.txt", "y"), InputError,
+                   "missing/x.txt");
   int files = 0;
   for (const auto& e : fs::directory_iterator(d)) files += e.is_regular_file() ? 1 : 0;
   EXPECT_EQ(files, 1);  // no .tmp left behind
@@ -133,15 +141,19 @@ TEST(Material, BadCardsGetLocatedErrors) {
       "[shear_modulus]\nvalue_GPa = 2\nsigma_GPa = 0.6\nsource = \"s\"\n";
   std::ofstream(d / "card.toml") << good_head;
   EXPECT_NO_THROW(load_material(d / "card.toml"));
-  std::ofstream(d / "card.toml") << good_head << "[[geometry]]\nplies = 2\nd_mm = 0.25\nD_mm = 0.1\nn = 440\n";
+  std::ofstream(d / "card.toml") << good_head
+                                 << "[[geometry]]\nplies = 2\nd_mm = 0.25\nD_mm = 0.1\nn = 440\n";
   EXPECT_THROW_MSG(load_material(d / "card.toml"), InputError, "spring index");
-  std::ofstream(d / "card.toml") << "id = \"card\"\nname = \"x\"\n[ply]\nlinear_density_dtex = -1\n";
-  EXPECT_THROW_MSG(load_material(d / "card.toml"), InputError, "card.toml:4:23: 'linear_density_dtex' must be > 0");
+  std::ofstream(d / "card.toml")
+      << "id = \"card\"\nname = \"x\"\n[ply]\nlinear_density_dtex = -1\n";
+  EXPECT_THROW_MSG(load_material(d / "card.toml"), InputError,
+                   "card.toml:4:23: 'linear_density_dtex' must be > 0");
   std::ofstream(d / "card.toml") << good_head << "colour = \"red\"\n";
   EXPECT_THROW_MSG(load_material(d / "card.toml"), InputError, "unknown key 'colour'");
   std::ofstream(d / "card.toml") << "id = = 3\n";
   EXPECT_THROW_MSG(load_material(d / "card.toml"), InputError, "card.toml:1:");
-  EXPECT_THROW_MSG(find_material("no-such-thread"), InputError, "no material card 'no-such-thread.toml'");
+  EXPECT_THROW_MSG(find_material("no-such-thread"), InputError,
+                   "no material card 'no-such-thread.toml'");
   fs::remove_all(d);
 }
 

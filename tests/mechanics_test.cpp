@@ -25,12 +25,14 @@ CoilGeometry coil(double d_mm, double D_mm, double n, int legs = 1) {
 TEST(Coil, StiffnessIsTheHelicalSpringFormula) {
   // K = G d^4 / (8 n D^3), recomputed by hand: G = 1 GPa, d = 1 mm, D = 5 mm, n = 10.
   EXPECT_NEAR(spring_stiffness(1e9, coil(1.0, 5.0, 10)), 1e9 * 1e-12 / (8 * 10 * 125e-9), 1e-9);
-  EXPECT_NEAR(spring_stiffness(1e9, coil(1.0, 5.0, 10, 2)), 2 * spring_stiffness(1e9, coil(1.0, 5.0, 10)), 1e-9);
+  EXPECT_NEAR(spring_stiffness(1e9, coil(1.0, 5.0, 10, 2)),
+              2 * spring_stiffness(1e9, coil(1.0, 5.0, 10)), 1e-9);
 }
 
 TEST(Coil, ReproducesPaper002Table1WithTheMeanDiameter) {
   // Table 1 prints K/K_2ply = 1, 1.06, 1.97 (truncated to two decimals: 1.0699, 1.9729).
-  const CoilGeometry c2 = coil(0.25, 0.35, 440), c4 = coil(0.31, 0.53, 280), c6 = coil(0.41, 0.68, 220);
+  const CoilGeometry c2 = coil(0.25, 0.35, 440), c4 = coil(0.31, 0.53, 280),
+                     c6 = coil(0.41, 0.68, 220);
   const CoilTolerances tol;
   const double r4 = stiffness_ratio(c4, c2, tol).value, r6 = stiffness_ratio(c6, c2, tol).value;
   EXPECT_DOUBLE_EQ(stiffness_ratio(c2, c2, tol).value, 1.0);
@@ -80,7 +82,8 @@ TEST(PlyMapping, ThreadMappingIsInputScalingByPliesRatio) {
   PreisachState c = PreisachState::negative_saturation(printed.grid());
   PreisachState d = PreisachState::negative_saturation(thread6.grid());
   double gap = 0.0;
-  for (double F : {0.6, 3.0, 7.0, 1.0}) gap = std::max(gap, std::abs(printed.step(c, F) - thread6.step(d, F)));
+  for (double F : {0.6, 3.0, 7.0, 1.0})
+    gap = std::max(gap, std::abs(printed.step(c, F) - thread6.step(d, F)));
   EXPECT_GT(gap, 1e-3);
 }
 

@@ -1,12 +1,12 @@
 // The Lawson-Hanson solver against the KKT conditions, against brute-force enumeration of
 // active sets on small problems, and on exactly representable solutions.
+#include "scpkit/identification/nnls.hpp"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Cholesky>
 #include <limits>
 #include <random>
-
-#include "scpkit/identification/nnls.hpp"
 
 namespace scpkit {
 namespace {

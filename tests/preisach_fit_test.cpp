@@ -1,12 +1,13 @@
 // Identification recovers known densities, reports what the data cannot identify, and its
 // cross-validation prefers the truth's resolution.
+#include "scpkit/identification/preisach_fit.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
 
 #include "scpkit/error.hpp"
-#include "scpkit/identification/preisach_fit.hpp"
 #include "test_support.hpp"
 
 namespace scpkit {
@@ -79,9 +80,9 @@ TEST(PreisachFit, CrossValidationBeatsTheUnregularisedFineGridOnNoisyData) {
   for (int i = 0; i < grid.levels; ++i) {
     for (int j = i; j < grid.levels; ++j) {
       const double b = (i + 0.5) / grid.levels, a = (j + 0.5) / grid.levels;
-      w[grid.cell_index(i, j)] = PreisachGrid::relative_area(i, j) *
-                                 std::exp(-std::pow((a - b - 0.2) / 0.15, 2) -
-                                          std::pow((a + b - 1.0) / 0.5, 2));
+      w[grid.cell_index(i, j)] =
+          PreisachGrid::relative_area(i, j) *
+          std::exp(-std::pow((a - b - 0.2) / 0.15, 2) - std::pow((a + b - 1.0) / 0.5, 2));
     }
   }
   const PreisachModel truth(grid, w / w.sum(), 0.0);

@@ -1,11 +1,12 @@
 // Properties of the discretised Preisach operator over many random models and histories.
+#include "scpkit/hysteresis/preisach.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 
 #include "scpkit/error.hpp"
-#include "scpkit/hysteresis/preisach.hpp"
 #include "test_support.hpp"
 
 namespace scpkit {
@@ -170,9 +171,9 @@ TEST(Preisach, MinorLoopsBetweenTheSameExtremaAreCongruent) {
     std::vector<std::vector<double>> increments;
     for (int h = 0; h < 2; ++h) {
       PreisachState s = PreisachState::negative_saturation(grid);
-      for (int k = 0; k < 6; ++k) s.apply(u(rng));  // different pasts
+      for (int k = 0; k < 6; ++k) s.apply(u(rng));      // different pasts
       s.apply(u2 + (1.0 - u2) * (0.1 + 0.9 * u(rng)));  // a maximum above u2
-      s.apply(u1);                                       // reversal at u1
+      s.apply(u1);                                      // reversal at u1
       const double y0 = model.output(s);
       std::vector<double> inc;
       for (double v : loop) inc.push_back(model.step(s, v) - y0);

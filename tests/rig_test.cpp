@@ -1,5 +1,7 @@
 // The virtual test rig: deterministic, faithful to its stated ground truth, and each effect
 // leaves the signature PHYSICS.md section 5 describes, in proportion to its magnitude.
+#include "scpkit/rig/rig.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -9,7 +11,6 @@
 #include "scpkit/identification/preisach_fit.hpp"
 #include "scpkit/io/measurement.hpp"
 #include "scpkit/mechanics/ply_mapping.hpp"
-#include "scpkit/rig/rig.hpp"
 #include "test_support.hpp"
 
 namespace scpkit {
@@ -76,7 +77,8 @@ TEST(Rig, ThreadStrainsFollowThePerPlyLoadAndTheGainIsTheStiffnessRatio) {
   // SCP = g thread + offset, g = K_thr / K_SCP of the card and Table 1 coil.
   const GainFit g = fit_scp_gain(t6, column(r6, "scp_strain_pct"));
   CoilGeometry c = card().geometry_for(6)->coil;
-  const double truth = card().thread_stiffness(6, 0.1) / spring_stiffness(card().shear_modulus_Pa.value, c);
+  const double truth =
+      card().thread_stiffness(6, 0.1) / spring_stiffness(card().shear_modulus_Pa.value, c);
   EXPECT_NEAR(g.gain, truth, 1e-9 * truth);
   EXPECT_NEAR(g.offset, 0.2, 1e-9);
 }
@@ -107,7 +109,8 @@ TEST(Rig, IdentificationRecoversTheTruthOnHeldOutLoads) {
 std::vector<double> effect_delta(const RigEffects& e) {
   RigSpec clean = clean_spec(2, "thread"), with = clean;
   with.effects = e;
-  const auto a = column(run_rig(clean, card()), "disp_mm"), b = column(run_rig(with, card()), "disp_mm");
+  const auto a = column(run_rig(clean, card()), "disp_mm"),
+             b = column(run_rig(with, card()), "disp_mm");
   std::vector<double> d(a.size());
   for (std::size_t k = 0; k < a.size(); ++k) d[k] = b[k] - a[k];
   return d;
@@ -120,7 +123,8 @@ TEST(Rig, DriftIsALinearTrendInTimeScaledByItsMagnitude) {
     const auto d = effect_delta(e);
     // Ends at mag * range (range ~ thread strain range * 100 mm), linear in between.
     const std::size_t mid = d.size() / 2;  // reading k is taken at (k + 1) dwells
-    EXPECT_NEAR(d.back() / d[mid], static_cast<double>(d.size()) / static_cast<double>(mid + 1), 1e-6);
+    EXPECT_NEAR(d.back() / d[mid], static_cast<double>(d.size()) / static_cast<double>(mid + 1),
+                1e-6);
     EXPECT_GT(d.back(), 0.0);
   }
 }
@@ -167,7 +171,7 @@ TEST(Rig, LonelyStrokeOffsetsEverythingAfterTheFirstRise) {
   RigEffects e;
   e.lonely_stroke = 0.05;
   const auto d = effect_delta(e);
-  EXPECT_NEAR(d.front(), 0.0, 1e-9);  // before the first rise
+  EXPECT_NEAR(d.front(), 0.0, 1e-9);             // before the first rise
   EXPECT_NEAR(d.back(), d[d.size() / 2], 1e-9);  // constant once the maximum was reached
   EXPECT_GT(d.back(), 0.0);
 }

@@ -11,14 +11,14 @@
 
 #include "scpkit/hysteresis/preisach.hpp"
 
-#define EXPECT_THROW_MSG(statement, type, fragment)                                  \
-  do {                                                                               \
-    try {                                                                            \
-      statement;                                                                     \
-      ADD_FAILURE() << "expected " #type " containing '" << (fragment) << "'";       \
-    } catch (const type& e) {                                                        \
+#define EXPECT_THROW_MSG(statement, type, fragment)                                   \
+  do {                                                                                \
+    try {                                                                             \
+      statement;                                                                      \
+      ADD_FAILURE() << "expected " #type " containing '" << (fragment) << "'";        \
+    } catch (const type& e) {                                                         \
       EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what(); \
-    }                                                                                \
+    }                                                                                 \
   } while (0)
 
 namespace scpkit::testing {

@@ -1,8 +1,9 @@
 #include "scpkit/metrics.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
-#include <fmt/format.h>
 
 #include "scpkit/error.hpp"
 
@@ -40,8 +41,10 @@ ErrorMetrics error_metrics(std::span<const double> measured, std::span<const dou
 }
 
 std::string ErrorMetrics::brief(const std::string& unit) const {
-  return fmt::format("E_max {:.3f} %  E_RMS {:.3f} % of range {:.4g} {};  mean|e| {:.4g} +- {:.4g} {}  ({} points)",
-                     max_pct_range, rms_pct_range, range, unit, mean_abs, sd_abs, unit, count);
+  return fmt::format(
+      "E_max {:.3f} %  E_RMS {:.3f} % of range {:.4g} {};  mean|e| {:.4g} +- {:.4g} {}  ({} "
+      "points)",
+      max_pct_range, rms_pct_range, range, unit, mean_abs, sd_abs, unit, count);
 }
 
 }  // namespace scpkit

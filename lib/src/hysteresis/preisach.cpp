@@ -162,8 +162,8 @@ double PreisachModel::everett(double a, double b) const {
   const double fb = tb - I;
   if (I == J) return w_(I, I) * (fa - fb) * (fa - fb);
   const double gb = 1.0 - fb;
-  return node_(J, I + 1) + gb * rowpre_(I, J - 1) + fa * colpre_(J, I + 1) +
-         w_(I, J) * gb * fa + w_(I, I) * gb * gb + w_(J, J) * fa * fa;
+  return node_(J, I + 1) + gb * rowpre_(I, J - 1) + fa * colpre_(J, I + 1) + w_(I, J) * gb * fa +
+         w_(I, I) * gb * gb + w_(J, J) * fa * fa;
 }
 
 double PreisachModel::output(const PreisachState& state) const {
@@ -189,12 +189,14 @@ double PreisachModel::output(const PreisachState& state) const {
 
 Eigen::VectorXd PreisachModel::simulate(PreisachState& state, std::span<const double> input) const {
   Eigen::VectorXd y(static_cast<Eigen::Index>(input.size()));
-  for (std::size_t t = 0; t < input.size(); ++t) y[static_cast<Eigen::Index>(t)] = step(state, input[t]);
+  for (std::size_t t = 0; t < input.size(); ++t)
+    y[static_cast<Eigen::Index>(t)] = step(state, input[t]);
   return y;
 }
 
 PreisachModel PreisachModel::with_input_scale(double scale) const {
-  if (!(scale > 0.0) || !std::isfinite(scale)) throw_invalid("input scale must be > 0, got {}", scale);
+  if (!(scale > 0.0) || !std::isfinite(scale))
+    throw_invalid("input scale must be > 0, got {}", scale);
   PreisachGrid g = grid_;
   g.lo /= scale;
   g.hi /= scale;
@@ -205,7 +207,8 @@ PreisachModel PreisachModel::with_output_affine(double gain, double offset) cons
   return PreisachModel(grid_, weights_ * gain, bias_ * gain + offset);
 }
 
-PreisachModel average_on_fine_grid(std::span<const PreisachModel> models, const PreisachGrid& fine) {
+PreisachModel average_on_fine_grid(std::span<const PreisachModel> models,
+                                   const PreisachGrid& fine) {
   fine.validate();
   if (models.empty()) throw_invalid("average_on_fine_grid: no models");
   const double hf = fine.step();
@@ -222,11 +225,12 @@ PreisachModel average_on_fine_grid(std::span<const PreisachModel> models, const 
   for (const PreisachModel& m : models) {
     const PreisachGrid& g = m.grid();
     const int a0 = on_lattice(g.lo, "lo");
-    const int S = on_lattice(fine.lo + g.step(), "step") ;
+    const int S = on_lattice(fine.lo + g.step(), "step");
     if (S < 1 || std::abs(S * hf - g.step()) > 1e-9 * g.step()) {
       throw_invalid("average_on_fine_grid: step {} is not a multiple of {}", g.step(), hf);
     }
-    if (a0 + g.levels * S > fine.levels) throw_invalid("average_on_fine_grid: model reaches beyond the fine grid");
+    if (a0 + g.levels * S > fine.levels)
+      throw_invalid("average_on_fine_grid: model reaches beyond the fine grid");
     const double S2 = static_cast<double>(S) * S;
     for (int i = 0; i < g.levels; ++i) {
       for (int j = i; j < g.levels; ++j) {

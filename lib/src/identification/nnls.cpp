@@ -1,9 +1,10 @@
 #include "scpkit/identification/nnls.hpp"
 
+#include <fmt/format.h>
+
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
-#include <fmt/format.h>
 
 #include "scpkit/error.hpp"
 
@@ -42,7 +43,6 @@ int solve_passive(const Eigen::MatrixXd& G, const Eigen::VectorXd& f, const std:
   for (Eigen::Index a = 0; a < p; ++a) z[P[a]] = zp[a];
   return tiny;
 }
-
 
 // Lawson-Hanson active-set iteration from a feasible x. Updates x, the passive flags and r.
 void lawson_hanson(const Eigen::MatrixXd& G, const Eigen::VectorXd& f,
@@ -145,7 +145,8 @@ NnlsResult solve_nnls(const Eigen::MatrixXd& G, const Eigen::VectorXd& f,
   // Phase 1: projected coordinate descent, keeping g = G x up to date (or a given start).
   Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
   if (warm_start.size() == n) {
-    for (Eigen::Index i = 0; i < n; ++i) x[i] = constrained[i] ? std::max(warm_start[i], 0.0) : warm_start[i];
+    for (Eigen::Index i = 0; i < n; ++i)
+      x[i] = constrained[i] ? std::max(warm_start[i], 0.0) : warm_start[i];
   }
   const int sweeps = warm_start.size() == n ? 0 : options.warm_start_sweeps;
   for (int sweep = 0; sweep < sweeps; ++sweep) {
@@ -177,8 +178,8 @@ NnlsResult solve_nnls(const Eigen::MatrixXd& G, const Eigen::VectorXd& f,
     }
     return P;
   };
-  const int max_iter = options.max_iterations > 0 ? options.max_iterations
-                                                  : static_cast<int>(3 * n + 30);
+  const int max_iter =
+      options.max_iterations > 0 ? options.max_iterations : static_cast<int>(3 * n + 30);
   Eigen::VectorXd z(n);
   int best_count = static_cast<int>(n) + 1, chances = 3;
   for (r.iterations = 0; r.iterations < max_iter; ++r.iterations) {
@@ -217,8 +218,8 @@ NnlsResult solve_nnls(const Eigen::MatrixXd& G, const Eigen::VectorXd& f,
   r.kkt_violation = kkt_violation(G, f, x, constrained, options.relative_tolerance);
   r.passive = static_cast<int>(std::count(in_p.begin(), in_p.end(), 1));
   if (!r.converged) {
-    r.message = fmt::format("NNLS stopped after {} iterations (KKT violation {:.3g})",
-                            r.iterations, r.kkt_violation);
+    r.message = fmt::format("NNLS stopped after {} iterations (KKT violation {:.3g})", r.iterations,
+                            r.kkt_violation);
   } else {
     r.message = fmt::format("NNLS converged in {} active-set iterations, {} of {} entries free",
                             r.iterations, r.passive, n);

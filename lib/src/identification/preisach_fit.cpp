@@ -1,10 +1,10 @@
 #include "scpkit/identification/preisach_fit.hpp"
 
-#include <Eigen/Cholesky>
+#include <fmt/format.h>
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
-#include <fmt/format.h>
 #include <limits>
 #include <map>
 #include <numeric>
@@ -53,8 +53,8 @@ Eigen::MatrixXd smoothness_penalty(const PreisachGrid& grid) {
 }
 
 Design make_design(const PreisachGrid& grid, int sign, std::span<const double> input,
-                   std::span<const double> output, const std::vector<int>& block_of,
-                   int nblocks, bool with_rank) {
+                   std::span<const double> output, const std::vector<int>& block_of, int nblocks,
+                   bool with_rank) {
   Design d;
   d.grid = grid;
   const auto n = static_cast<Eigen::Index>(input.size());
@@ -188,7 +188,8 @@ std::vector<double> heldout_rms_pct(const std::vector<Design>& shifts,
     for (std::size_t l = 0; l < lambdas.size(); ++l) {
       Eigen::VectorXd pred = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(rows.size()));
       for (std::size_t k = 0; k < shifts.size(); ++k) {
-        const NnlsResult r = solve_design(shifts[k], lambdas[l], static_cast<int>(b), nnls, warm[k]);
+        const NnlsResult r =
+            solve_design(shifts[k], lambdas[l], static_cast<int>(b), nnls, warm[k]);
         warm[k] = r.x;
         for (std::size_t i = 0; i < rows.size(); ++i) {
           pred[static_cast<Eigen::Index>(i)] += shifts[k].A.row(rows[i]).dot(r.x) / S;
@@ -274,7 +275,9 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
       throw IdentificationError(fmt::format("sample {} is not finite", t + 1));
     }
   }
-  if (n < 8) throw IdentificationError(fmt::format("{} samples are too few to identify a Preisach model (need >= 8)", n));
+  if (n < 8)
+    throw IdentificationError(
+        fmt::format("{} samples are too few to identify a Preisach model (need >= 8)", n));
   const auto [umin, umax] = std::minmax_element(input.begin(), input.end());
   const auto [ymin, ymax] = std::minmax_element(output.begin(), output.end());
   if (!(*umax > *umin)) throw IdentificationError("the input never changes: nothing to identify");
@@ -312,11 +315,10 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
   PreisachFitSummary summary;
   summary.sign = sign;
   summary.folds_used = nblocks;
-  std::vector<int> levels = options.levels > 0 ? std::vector<int>{options.levels}
-                                               : options.candidate_levels;
-  std::vector<double> lambdas = options.smoothness >= 0.0
-                                    ? std::vector<double>{options.smoothness}
-                                    : options.candidate_smoothness;
+  std::vector<int> levels =
+      options.levels > 0 ? std::vector<int>{options.levels} : options.candidate_levels;
+  std::vector<double> lambdas = options.smoothness >= 0.0 ? std::vector<double>{options.smoothness}
+                                                          : options.candidate_smoothness;
   const bool run_cv = levels.size() > 1 || lambdas.size() > 1;
   // Never offer more unknowns than the data can carry: half the samples without
   // regularisation, twice the samples with it (the smoothness term adds the rest).
@@ -324,7 +326,9 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
     const double cells = L * (L + 1) / 2 + 1.0;
     return cells > (lambda > 0.0 ? 2.0 : 0.5) * static_cast<double>(n);
   };
-  std::erase_if(levels, [&](int L) { return run_cv && too_big(L, *std::max_element(lambdas.begin(), lambdas.end())); });
+  std::erase_if(levels, [&](int L) {
+    return run_cv && too_big(L, *std::max_element(lambdas.begin(), lambdas.end()));
+  });
   if (levels.empty()) levels = {std::max(1, std::min(options.candidate_levels.front(), 4))};
   const std::vector<char> eligible = heldout_eligible(input, block_of, nblocks);
   summary.heldout_blocks = static_cast<int>(std::count(eligible.begin(), eligible.end(), 1));
@@ -349,8 +353,8 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
         if (!too_big(L, lam)) lams.push_back(lam);
       }
       if (lams.empty()) continue;
-      const std::vector<double> cv = heldout_rms_pct(designs_for(L, false), lams, block_of, eligible,
-                                                     output, range, options.nnls);
+      const std::vector<double> cv = heldout_rms_pct(designs_for(L, false), lams, block_of,
+                                                     eligible, output, range, options.nnls);
       for (std::size_t l = 0; l < lams.size(); ++l) {
         summary.cross_validation.push_back({L, lams[l], cv[l]});
         if (cv[l] < best) {
@@ -378,8 +382,8 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
     summary.kkt_violation = std::max(summary.kkt_violation, r.kkt_violation);
     if (message.empty() || !r.converged) message = r.message;
   }
-  PreisachModel model = S == 1 ? models.front()
-                               : average_on_fine_grid(models, fine_grid(base, chosen_levels, S));
+  PreisachModel model =
+      S == 1 ? models.front() : average_on_fine_grid(models, fine_grid(base, chosen_levels, S));
   const Design& d = shifts.front();
   const int p = d.grid.cells();
   summary.levels = chosen_levels;
@@ -419,7 +423,8 @@ std::string PreisachFitSummary::BriefReport() const {
       train.rms_pct_range);
   if (cv_rms_pct_range >= 0.0) {
     s += fmt::format(
-        "\n  cross-validated: {} of {} blocks held out in turn (blocks holding an input extreme stay in training), held-out "
+        "\n  cross-validated: {} of {} blocks held out in turn (blocks holding an input extreme "
+        "stay in training), held-out "
         "E_RMS {:.3f} % of range",
         heldout_blocks, folds_used, cv_rms_pct_range);
   }

@@ -1,12 +1,12 @@
 #include "scpkit/io/atomic_file.hpp"
 
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
-#include <fmt/format.h>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -20,8 +20,9 @@ void write_file_atomically(const std::filesystem::path& path, std::string_view c
   std::string tmpl = (dir / fmt::format(".{}.tmp-XXXXXX", path.filename().string())).string();
   const int fd = ::mkstemp(tmpl.data());
   if (fd < 0) {
-    throw InputError(path.string(), 0, 0,
-                     std::string("cannot create a temporary file beside it: ") + std::strerror(errno));
+    throw InputError(
+        path.string(), 0, 0,
+        std::string("cannot create a temporary file beside it: ") + std::strerror(errno));
   }
   std::size_t done = 0;
   while (done < content.size()) {
@@ -54,7 +55,8 @@ std::string read_text_file(const std::filesystem::path& path) {
     throw InputError(path.string(), 0, 0, "is a directory, not a file");
   }
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path.string(), 0, 0, std::string("cannot open: ") + std::strerror(errno));
+  if (!in)
+    throw InputError(path.string(), 0, 0, std::string("cannot open: ") + std::strerror(errno));
   std::ostringstream ss;
   ss << in.rdbuf();
   return ss.str();

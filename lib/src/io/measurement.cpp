@@ -1,9 +1,10 @@
 #include "scpkit/io/measurement.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <fmt/format.h>
 #include <set>
 
 #include "scpkit/error.hpp"
@@ -20,28 +21,40 @@ struct UnitRule {
 
 // Every column name scpkit understands, with its factor to canonical units.
 constexpr UnitRule kUnits[] = {
-    {"time_s", Quantity::kTime, 1.0},          {"time_ms", Quantity::kTime, 1e-3},
-    {"time_min", Quantity::kTime, 60.0},       {"time_h", Quantity::kTime, 3600.0},
-    {"dwell_s", Quantity::kDwell, 1.0},        {"dwell_min", Quantity::kDwell, 60.0},
-    {"load_g", Quantity::kLoad, 9.80665e-3},   {"load_mN", Quantity::kLoad, 1e-3},
-    {"load_N", Quantity::kLoad, 1.0},          {"load_kg", Quantity::kLoad, 9.80665},
-    {"voltage_V", Quantity::kVoltage, 1.0},    {"voltage_mV", Quantity::kVoltage, 1e-3},
-    {"power_W", Quantity::kPower, 1.0},        {"power_mW", Quantity::kPower, 1e-3},
-    {"temp_C", Quantity::kTemperature, 1.0},   {"strain", Quantity::kStrain, 1.0},
-    {"strain_pct", Quantity::kStrain, 0.01},   {"disp_mm", Quantity::kDisplacement, 1.0},
-    {"disp_um", Quantity::kDisplacement, 1e-3}, {"disp_m", Quantity::kDisplacement, 1e3},
+    {"time_s", Quantity::kTime, 1.0},
+    {"time_ms", Quantity::kTime, 1e-3},
+    {"time_min", Quantity::kTime, 60.0},
+    {"time_h", Quantity::kTime, 3600.0},
+    {"dwell_s", Quantity::kDwell, 1.0},
+    {"dwell_min", Quantity::kDwell, 60.0},
+    {"load_g", Quantity::kLoad, 9.80665e-3},
+    {"load_mN", Quantity::kLoad, 1e-3},
+    {"load_N", Quantity::kLoad, 1.0},
+    {"load_kg", Quantity::kLoad, 9.80665},
+    {"voltage_V", Quantity::kVoltage, 1.0},
+    {"voltage_mV", Quantity::kVoltage, 1e-3},
+    {"power_W", Quantity::kPower, 1.0},
+    {"power_mW", Quantity::kPower, 1e-3},
+    {"temp_C", Quantity::kTemperature, 1.0},
+    {"strain", Quantity::kStrain, 1.0},
+    {"strain_pct", Quantity::kStrain, 0.01},
+    {"disp_mm", Quantity::kDisplacement, 1.0},
+    {"disp_um", Quantity::kDisplacement, 1e-3},
+    {"disp_m", Quantity::kDisplacement, 1e3},
     {"thread_strain", Quantity::kThreadStrain, 1.0},
     {"thread_strain_pct", Quantity::kThreadStrain, 0.01},
-    {"scp_strain", Quantity::kScpStrain, 1.0}, {"scp_strain_pct", Quantity::kScpStrain, 0.01},
+    {"scp_strain", Quantity::kScpStrain, 1.0},
+    {"scp_strain_pct", Quantity::kScpStrain, 0.01},
     {"segment", Quantity::kSegment, 1.0},
 };
 
 // Prefixes that name a quantity: a column starting with one but not in kUnits has an
 // unknown unit, which is an error rather than a silently ignored column.
 constexpr std::pair<const char*, const char*> kPrefixes[] = {
-    {"time_", "s, ms, min or h"},  {"dwell_", "s or min"},   {"load_", "g, mN, N or kg"},
-    {"voltage_", "V or mV"},       {"power_", "W or mW"},    {"temp_", "C"},
-    {"disp_", "mm, um or m"},      {"strain_", "pct (or plain 'strain' for a fraction)"},
+    {"time_", "s, ms, min or h"}, {"dwell_", "s or min"},
+    {"load_", "g, mN, N or kg"},  {"voltage_", "V or mV"},
+    {"power_", "W or mW"},        {"temp_", "C"},
+    {"disp_", "mm, um or m"},     {"strain_", "pct (or plain 'strain' for a fraction)"},
 };
 
 std::string_view trim(std::string_view s) {
@@ -52,18 +65,29 @@ std::string_view trim(std::string_view s) {
 
 const char* quantity_word(Quantity q) {
   switch (q) {
-    case Quantity::kTime: return "time";
-    case Quantity::kDwell: return "dwell";
-    case Quantity::kLoad: return "load";
-    case Quantity::kVoltage: return "voltage";
-    case Quantity::kPower: return "power";
-    case Quantity::kTemperature: return "temperature";
+    case Quantity::kTime:
+      return "time";
+    case Quantity::kDwell:
+      return "dwell";
+    case Quantity::kLoad:
+      return "load";
+    case Quantity::kVoltage:
+      return "voltage";
+    case Quantity::kPower:
+      return "power";
+    case Quantity::kTemperature:
+      return "temperature";
     case Quantity::kStrain:
-    case Quantity::kDisplacement: return "response";
-    case Quantity::kThreadStrain: return "thread strain";
-    case Quantity::kScpStrain: return "SCP strain";
-    case Quantity::kSegment: return "segment";
-    case Quantity::kUnknown: return "unknown";
+    case Quantity::kDisplacement:
+      return "response";
+    case Quantity::kThreadStrain:
+      return "thread strain";
+    case Quantity::kScpStrain:
+      return "SCP strain";
+    case Quantity::kSegment:
+      return "segment";
+    case Quantity::kUnknown:
+      return "unknown";
   }
   return "unknown";
 }
@@ -130,9 +154,11 @@ Measurement Measurement::parse(std::string_view text, const std::string& source)
       std::set<Quantity> seen;
       for (std::size_t i = 0; i < fields.size(); ++i) {
         const std::string& name = fields[i];
-        if (name.empty()) throw InputError(source, line_no, starts[i], "empty column name in the header");
+        if (name.empty())
+          throw InputError(source, line_no, starts[i], "empty column name in the header");
         if (!names.insert(name).second) {
-          throw InputError(source, line_no, starts[i], fmt::format("column '{}' appears twice", name));
+          throw InputError(source, line_no, starts[i],
+                           fmt::format("column '{}' appears twice", name));
         }
         MeasurementColumn c;
         c.name = name;
@@ -146,13 +172,14 @@ Measurement Measurement::parse(std::string_view text, const std::string& source)
         if (c.quantity == Quantity::kUnknown) {
           for (const auto& [prefix, units] : kPrefixes) {
             if (name.rfind(prefix, 0) == 0) {
-              throw InputError(source, line_no, starts[i],
-                               fmt::format("unknown unit '{}' in column '{}' (use {})",
-                                           name.substr(std::string_view(prefix).size()), name, units));
+              throw InputError(
+                  source, line_no, starts[i],
+                  fmt::format("unknown unit '{}' in column '{}' (use {})",
+                              name.substr(std::string_view(prefix).size()), name, units));
             }
           }
-        } else if (!seen.insert(c.quantity).second &&
-                   c.quantity != Quantity::kStrain && c.quantity != Quantity::kDisplacement) {
+        } else if (!seen.insert(c.quantity).second && c.quantity != Quantity::kStrain &&
+                   c.quantity != Quantity::kDisplacement) {
           throw InputError(source, line_no, starts[i],
                            fmt::format("a second {} column '{}'", quantity_word(c.quantity), name));
         }
@@ -163,9 +190,10 @@ Measurement Measurement::parse(std::string_view text, const std::string& source)
     }
     if (fields.size() != m.columns_.size()) {
       const int col = fields.size() < m.columns_.size() ? static_cast<int>(line.size()) + 1
-                                                         : starts[m.columns_.size()];
-      throw InputError(source, line_no, col,
-                       fmt::format("{} fields, the header has {}", fields.size(), m.columns_.size()));
+                                                        : starts[m.columns_.size()];
+      throw InputError(
+          source, line_no, col,
+          fmt::format("{} fields, the header has {}", fields.size(), m.columns_.size()));
     }
     for (auto& c : m.columns_) {
       if (c.quantity == Quantity::kUnknown) continue;
@@ -230,8 +258,9 @@ std::optional<int> Measurement::meta_positive_int(const std::string& key) const 
   const auto v = meta_number(key);
   if (!v) return std::nullopt;
   if (*v < 1 || *v != std::floor(*v) || *v > 1e6) {
-    throw InputError(source_, metadata_lines_.at(key), 0,
-                     fmt::format("metadata '{}' must be a positive integer, got '{}'", key, *meta(key)));
+    throw InputError(
+        source_, metadata_lines_.at(key), 0,
+        fmt::format("metadata '{}' must be a positive integer, got '{}'", key, *meta(key)));
   }
   return static_cast<int>(*v);
 }
@@ -265,15 +294,17 @@ Signal select_input(const Measurement& m, const std::string& wanted) {
     if (!c) continue;
     if (!wanted.empty()) {
       const std::string w = wanted;
-      const std::string stem = std::string(k.canonical).substr(0, std::string(k.canonical).find('_'));
+      const std::string stem =
+          std::string(k.canonical).substr(0, std::string(k.canonical).find('_'));
       if (w == k.canonical || w == c->name || w == stem) return {k.canonical, c->name, c->values};
       continue;
     }
     if (varies(c->values)) present.push_back(&k);
   }
   if (!wanted.empty()) {
-    throw InputError(m.source(), m.header_line(), 0,
-                     fmt::format("no input column for '{}' (load_g/mN/N, voltage_V, power_W, temp_C)", wanted));
+    throw InputError(
+        m.source(), m.header_line(), 0,
+        fmt::format("no input column for '{}' (load_g/mN/N, voltage_V, power_W, temp_C)", wanted));
   }
   if (present.empty()) {
     throw InputError(m.source(), m.header_line(), 0,
@@ -300,7 +331,8 @@ Signal select_response(const Measurement& m, const std::string& wanted) {
     return {"strain", c->name, c->values};
   }
   if (!wanted.empty() && wanted != "strain" && wanted != "disp_mm") {
-    throw InvalidArgument(fmt::format("unknown response '{}' (strain, disp_mm, thread, scp)", wanted));
+    throw InvalidArgument(
+        fmt::format("unknown response '{}' (strain, disp_mm, thread, scp)", wanted));
   }
   const MeasurementColumn* strain = nullptr;
   const MeasurementColumn* disp = nullptr;

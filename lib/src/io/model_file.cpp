@@ -20,13 +20,13 @@ void save_model(const std::filesystem::path& path, const ModelFile& m) {
   j["response"] = m.response;
   j["response_column"] = m.response_column;
   const PreisachGrid& g = m.preisach.grid();
-  j["preisach"] = {{"lo", g.lo},
-                   {"hi", g.hi},
-                   {"levels", g.levels},
-                   {"bias", m.preisach.bias()},
-                   {"weights", std::vector<double>(m.preisach.weights().begin(),
-                                                   m.preisach.weights().end())},
-                   {"weights_are", "cell masses, row-major over beta level i then alpha level j >= i"}};
+  j["preisach"] = {
+      {"lo", g.lo},
+      {"hi", g.hi},
+      {"levels", g.levels},
+      {"bias", m.preisach.bias()},
+      {"weights", std::vector<double>(m.preisach.weights().begin(), m.preisach.weights().end())},
+      {"weights_are", "cell masses, row-major over beta level i then alpha level j >= i"}};
   json s;
   s["specimen"] = m.specimen.specimen;
   s["material"] = m.specimen.material;
@@ -34,7 +34,8 @@ void save_model(const std::filesystem::path& path, const ModelFile& m) {
   s["length_mm"] = m.specimen.length_mm;
   if (m.specimen.coil) {
     const CoilGeometry& c = *m.specimen.coil;
-    s["coil"] = {{"d_mm", c.wire_d_m * 1e3}, {"D_mm", c.mean_D_m * 1e3}, {"n", c.coils}, {"legs", c.legs}};
+    s["coil"] = {
+        {"d_mm", c.wire_d_m * 1e3}, {"D_mm", c.mean_D_m * 1e3}, {"n", c.coils}, {"legs", c.legs}};
   }
   j["specimen"] = s;
   if (m.scp_gain) {
@@ -72,7 +73,8 @@ ModelFile load_model(const std::filesystem::path& path) {
     throw InputError(name, line, col, "not a JSON model file");
   }
   try {
-    if (j.value("format", "") != "scpkit-model") throw InputError(name, 0, 0, "not an scpkit model file (format is not 'scpkit-model')");
+    if (j.value("format", "") != "scpkit-model")
+      throw InputError(name, 0, 0, "not an scpkit model file (format is not 'scpkit-model')");
     if (j.value("version", 0) != 1) throw InputError(name, 0, 0, "unsupported model file version");
     ModelFile m;
     m.model = j.at("model").get<std::string>();
@@ -80,12 +82,14 @@ ModelFile load_model(const std::filesystem::path& path) {
     m.input = j.at("input").get<std::string>();
     m.response = j.at("response").get<std::string>();
     m.response_column = j.value("response_column", "");
-    if (m.response != "strain" && m.response != "disp_mm") throw InputError(name, 0, 0, "unknown response '" + m.response + "'");
+    if (m.response != "strain" && m.response != "disp_mm")
+      throw InputError(name, 0, 0, "unknown response '" + m.response + "'");
     const json& p = j.at("preisach");
     PreisachGrid g{p.at("lo").get<double>(), p.at("hi").get<double>(), p.at("levels").get<int>()};
     const auto w = p.at("weights").get<std::vector<double>>();
-    m.preisach = PreisachModel(g, Eigen::Map<const Eigen::VectorXd>(w.data(), static_cast<Eigen::Index>(w.size())),
-                               p.at("bias").get<double>());
+    m.preisach = PreisachModel(
+        g, Eigen::Map<const Eigen::VectorXd>(w.data(), static_cast<Eigen::Index>(w.size())),
+        p.at("bias").get<double>());
     const json& s = j.at("specimen");
     m.specimen.specimen = s.value("specimen", "");
     m.specimen.material = s.value("material", "");

@@ -2,11 +2,11 @@
 // Private helper: typed, located reads from a toml++ table. Every failure is an InputError
 // at the offending node's line and column. Kept out of the public headers so that toml++
 // is compiled only where a file is read.
+#include <fmt/format.h>
 #include <toml++/toml.h>
 
 #include <cmath>
 #include <filesystem>
-#include <fmt/format.h>
 #include <initializer_list>
 #include <string>
 

@@ -1,7 +1,8 @@
 #include "scpkit/mechanics/coil.hpp"
 
-#include <cmath>
 #include <fmt/format.h>
+
+#include <cmath>
 
 #include "scpkit/error.hpp"
 
@@ -17,9 +18,12 @@ double relative_variance(const CoilGeometry& g, const CoilTolerances& t) {
 }  // namespace
 
 void CoilGeometry::validate() const {
-  if (!(wire_d_m > 0.0) || !std::isfinite(wire_d_m)) throw_invalid("wire diameter d must be > 0, got {} m", wire_d_m);
-  if (!(mean_D_m > 0.0) || !std::isfinite(mean_D_m)) throw_invalid("mean coil diameter D must be > 0, got {} m", mean_D_m);
-  if (!(coils > 0.0) || !std::isfinite(coils)) throw_invalid("number of coils n must be > 0, got {}", coils);
+  if (!(wire_d_m > 0.0) || !std::isfinite(wire_d_m))
+    throw_invalid("wire diameter d must be > 0, got {} m", wire_d_m);
+  if (!(mean_D_m > 0.0) || !std::isfinite(mean_D_m))
+    throw_invalid("mean coil diameter D must be > 0, got {} m", mean_D_m);
+  if (!(coils > 0.0) || !std::isfinite(coils))
+    throw_invalid("number of coils n must be > 0, got {}", coils);
   if (legs != 1 && legs != 2) throw_invalid("legs must be 1 or 2, got {}", legs);
   if (!(length_m >= 0.0)) throw_invalid("length must be >= 0, got {} m", length_m);
   if (spring_index() < 1.0) {

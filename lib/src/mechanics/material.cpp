@@ -1,18 +1,20 @@
 #include "scpkit/mechanics/material.hpp"
 
-#include <cmath>
-#include <cstdlib>
 #include <fmt/format.h>
 
-#include "scpkit/error.hpp"
+#include <cmath>
+#include <cstdlib>
+
 #include "../io/toml_reader.hpp"
+#include "scpkit/error.hpp"
 
 namespace scpkit {
 
 double Material::ply_area_m2() const { return linear_density_dtex * 1e-7 / density_kg_m3; }
 
 double Material::thread_stiffness(int plies, double length_m) const {
-  if (plies < 1 || !(length_m > 0.0)) throw_invalid("thread stiffness needs plies >= 1 and length > 0");
+  if (plies < 1 || !(length_m > 0.0))
+    throw_invalid("thread stiffness needs plies >= 1 and length > 0");
   return tensile_modulus_Pa.value * plies * ply_area_m2() / length_m;
 }
 
@@ -28,7 +30,8 @@ Material load_material(const std::filesystem::path& file) {
   const std::string name = file.string();
   const toml::table root = TomlReader::parse(file);
   const TomlReader r(name);
-  r.only_keys(root, {"id", "name", "source", "ply", "tensile_modulus", "shear_modulus", "geometry"});
+  r.only_keys(root,
+              {"id", "name", "source", "ply", "tensile_modulus", "shear_modulus", "geometry"});
   Material m;
   m.id = r.text(root, "id", "", true);
   m.name = r.text(root, "name", "", true);
@@ -42,7 +45,8 @@ Material load_material(const std::filesystem::path& file) {
     const toml::table& t = *r.table(root, key, true);
     r.only_keys(t, {"value_GPa", "sigma_GPa", "source"});
     source = r.text(t, "source", "", true);
-    return Uncertain{r.positive(t, "value_GPa") * 1e9, r.number(t, "sigma_GPa", 0.0, 0.0, true) * 1e9};
+    return Uncertain{r.positive(t, "value_GPa") * 1e9,
+                     r.number(t, "sigma_GPa", 0.0, 0.0, true) * 1e9};
   };
   m.tensile_modulus_Pa = modulus("tensile_modulus", m.tensile_modulus_source);
   m.shear_modulus_Pa = modulus("shear_modulus", m.shear_modulus_source);
@@ -71,7 +75,8 @@ Material load_material(const std::filesystem::path& file) {
     }
   }
   if (m.id != file.stem().string()) {
-    r.fail(root.get("id"), fmt::format("id '{}' does not match the file name '{}'", m.id, file.filename().string()));
+    r.fail(root.get("id"), fmt::format("id '{}' does not match the file name '{}'", m.id,
+                                       file.filename().string()));
   }
   return m;
 }

@@ -1,7 +1,8 @@
 #include "scpkit/mechanics/ply_mapping.hpp"
 
-#include <cmath>
 #include <fmt/format.h>
+
+#include <cmath>
 
 #include "scpkit/error.hpp"
 
@@ -25,9 +26,12 @@ PreisachModel paper_eq7_as_printed(const PreisachModel& thread_p, int p, int q) 
 }
 
 GainFit fit_scp_gain(std::span<const double> x, std::span<const double> y) {
-  if (x.size() != y.size()) throw_invalid("gain fit: {} thread vs {} SCP strains", x.size(), y.size());
+  if (x.size() != y.size())
+    throw_invalid("gain fit: {} thread vs {} SCP strains", x.size(), y.size());
   const std::size_t n = x.size();
-  if (n < 3) throw IdentificationError(fmt::format("{} paired strains are too few for a gain (need >= 3)", n));
+  if (n < 3)
+    throw IdentificationError(
+        fmt::format("{} paired strains are too few for a gain (need >= 3)", n));
   double mx = 0.0, my = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
     mx += x[i];
@@ -64,8 +68,8 @@ double paper_eq8_as_printed_gain(double g_p, int p, const CoilGeometry& scp_p, i
   return g_p * q / p * spring_stiffness(1.0, scp_q) / spring_stiffness(1.0, scp_p);
 }
 
-PreisachModel map_thread_to_scp(const PreisachModel& thread_p, int p, const GainFit& gain_p,
-                                int q, double gain_q) {
+PreisachModel map_thread_to_scp(const PreisachModel& thread_p, int p, const GainFit& gain_p, int q,
+                                double gain_q) {
   if (gain_p.gain == 0.0) throw_invalid("the p-ply SCP gain is zero");
   return map_thread_plies(thread_p, p, q)
       .with_output_affine(gain_q, gain_p.offset * gain_q / gain_p.gain);

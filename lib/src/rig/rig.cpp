@@ -1,8 +1,9 @@
 #include "scpkit/rig/rig.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
-#include <fmt/format.h>
 #include <random>
 #include <sstream>
 
@@ -12,7 +13,7 @@
 namespace scpkit {
 namespace {
 
-constexpr double kGram = 9.80665e-3;  // N per gram-force
+constexpr double kGram = 9.80665e-3;      // N per gram-force
 constexpr double kTruthMaxPerPlyN = 2.0;  // the truth's plane covers 0..2 N per ply (204 g)
 
 }  // namespace
@@ -23,18 +24,23 @@ void RigSpec::validate() const {
   }
   if (plies < 1 || plies > 100) throw_invalid("plies must be 1..100, got {}", plies);
   if (!(length_mm > 0.0)) throw_invalid("length_mm must be > 0");
-  if (!(resolution_mm >= 0.0) || !(noise_mm >= 0.0)) throw_invalid("sensor resolution and noise must be >= 0");
+  if (!(resolution_mm >= 0.0) || !(noise_mm >= 0.0))
+    throw_invalid("sensor resolution and noise must be >= 0");
   const LoadProtocol& p = protocol;
   if (!(p.min_g >= 0.0) || !(p.max_g > p.min_g)) throw_invalid("protocol needs 0 <= min_g < max_g");
-  if (p.cycles < 1 || p.steps_per_half < 1 || p.minor_loops < 0) throw_invalid("protocol counts must be positive");
+  if (p.cycles < 1 || p.steps_per_half < 1 || p.minor_loops < 0)
+    throw_invalid("protocol counts must be positive");
   if (!(p.dwell_s > 0.0)) throw_invalid("dwell_s must be > 0");
   const RigEffects& e = effects;
   for (double v : {e.creep, e.drift, e.lonely_stroke, e.outliers, e.minor_loop_noncongruence}) {
-    if (!(v >= 0.0) || !std::isfinite(v)) throw_invalid("effect magnitudes must be finite and >= 0");
+    if (!(v >= 0.0) || !std::isfinite(v))
+      throw_invalid("effect magnitudes must be finite and >= 0");
   }
   if (e.creep > 1.0) throw_invalid("creep is a fraction of the strain, <= 1");
   if (e.minor_loop_noncongruence > 0.4) {
-    throw_invalid("minor_loop_noncongruence must be <= 0.4 (the shifted input would leave the truth's plane)");
+    throw_invalid(
+        "minor_loop_noncongruence must be <= 0.4 (the shifted input would leave the truth's "
+        "plane)");
   }
   if (!(e.creep_tau_s > 0.0)) throw_invalid("creep_tau_s must be > 0");
   if (coil) coil->validate();
@@ -42,7 +48,8 @@ void RigSpec::validate() const {
     if (load_sequence_g->size() < 2) throw_invalid("load_sequence_g needs at least 2 loads");
     for (double g : *load_sequence_g) {
       if (!(g >= 0.0) || !std::isfinite(g)) throw_invalid("loads must be finite and >= 0 g");
-      if (g * kGram / plies > kTruthMaxPerPlyN) throw_invalid("load {} g exceeds the rig's {} N per ply", g, kTruthMaxPerPlyN);
+      if (g * kGram / plies > kTruthMaxPerPlyN)
+        throw_invalid("load {} g exceeds the rig's {} N per ply", g, kTruthMaxPerPlyN);
     }
   }
   const double scale = p.scale_with_plies ? plies / 2.0 : 1.0;
@@ -74,13 +81,15 @@ RigSpec load_rig_spec(const std::filesystem::path& path) {
     s.coil = g;
   }
   if (const toml::table* p = r.table(root, "protocol")) {
-    r.only_keys(*p, {"min_g", "max_g", "scale_with_plies", "cycles", "steps_per_half", "minor_loops", "dwell_s"});
+    r.only_keys(*p, {"min_g", "max_g", "scale_with_plies", "cycles", "steps_per_half",
+                     "minor_loops", "dwell_s"});
     LoadProtocol& q = s.protocol;
     q.min_g = r.number(*p, "min_g", q.min_g, 0.0);
     q.max_g = r.positive(*p, "max_g", q.max_g, false);
     q.scale_with_plies = r.boolean(*p, "scale_with_plies", q.scale_with_plies);
     q.cycles = static_cast<int>(r.integer(*p, "cycles", q.cycles, 1, 10000));
-    q.steps_per_half = static_cast<int>(r.integer(*p, "steps_per_half", q.steps_per_half, 1, 10000));
+    q.steps_per_half =
+        static_cast<int>(r.integer(*p, "steps_per_half", q.steps_per_half, 1, 10000));
     q.minor_loops = static_cast<int>(r.integer(*p, "minor_loops", q.minor_loops, 0, 10000));
     q.dwell_s = r.positive(*p, "dwell_s", q.dwell_s, false);
   }
@@ -90,7 +99,8 @@ RigSpec load_rig_spec(const std::filesystem::path& path) {
     s.noise_mm = r.number(*p, "noise_mm", s.noise_mm, 0.0);
   }
   if (const toml::table* p = r.table(root, "effects")) {
-    r.only_keys(*p, {"creep", "creep_tau_s", "drift", "lonely_stroke", "outliers", "minor_loop_noncongruence"});
+    r.only_keys(*p, {"creep", "creep_tau_s", "drift", "lonely_stroke", "outliers",
+                     "minor_loop_noncongruence"});
     RigEffects& e = s.effects;
     e.creep = r.number(*p, "creep", 0.0, 0.0);
     e.creep_tau_s = r.positive(*p, "creep_tau_s", e.creep_tau_s, false);
@@ -133,7 +143,8 @@ PreisachModel rig_thread_truth(const Material& material) {
       const double hysteretic = std::exp(-std::pow((width - 0.3) / 0.3, 2));
       const double elastic = 3.0 * std::exp(-std::pow(width / 0.06, 2));
       const double softening = 1.0 + 0.8 * std::exp(-mean / 0.4);
-      w[grid.cell_index(i, j)] = PreisachGrid::relative_area(i, j) * (hysteretic + elastic) * softening;
+      w[grid.cell_index(i, j)] =
+          PreisachGrid::relative_area(i, j) * (hysteretic + elastic) * softening;
     }
   }
   PreisachModel unit(grid, w, 0.0);
@@ -155,7 +166,8 @@ std::vector<double> rig_load_protocol(const RigSpec& spec) {
   std::vector<double> loads{lo};
   auto ramp = [&](double to) {
     const double from = loads.back();
-    for (int k = 1; k <= p.steps_per_half; ++k) loads.push_back(from + (to - from) * k / p.steps_per_half);
+    for (int k = 1; k <= p.steps_per_half; ++k)
+      loads.push_back(from + (to - from) * k / p.steps_per_half);
   };
   // Damped oscillation: amplitude falls geometrically to 15 % over the cycles.
   const int turns = 2 * p.cycles;
@@ -189,7 +201,8 @@ RigRun run_rig(const RigSpec& spec, const Material& material) {
   } else if (const ReferenceGeometry* g = material.geometry_for(spec.plies)) {
     coil = g->coil;
   } else if (spec.specimen != "thread") {
-    throw_invalid("no coil given and material '{}' has no geometry for {} plies", material.id, spec.plies);
+    throw_invalid("no coil given and material '{}' has no geometry for {} plies", material.id,
+                  spec.plies);
   }
   const double length_m = spec.length_mm * 1e-3;
   double gain = 0.0;
@@ -226,7 +239,8 @@ RigRun run_rig(const RigSpec& spec, const Material& material) {
       y = truth.output(state);
       for (int it = 0; it < 30; ++it) {
         state = before;
-        const double y_new = truth.step(state, f + e.minor_loop_noncongruence * f_range * y / y_range);
+        const double y_new =
+            truth.step(state, f + e.minor_loop_noncongruence * f_range * y / y_range);
         if (std::abs(y_new - y) < 1e-14) break;
         y = y_new;
       }
@@ -254,7 +268,8 @@ RigRun run_rig(const RigSpec& spec, const Material& material) {
         strain += (U(rng) < 0.5 ? -1.0 : 1.0) * e.outliers * range * (1.0 + U(rng));
       }
       double disp = strain * spec.length_mm + spec.noise_mm * normal(rng);
-      if (spec.resolution_mm > 0.0) disp = std::round(disp / spec.resolution_mm) * spec.resolution_mm;
+      if (spec.resolution_mm > 0.0)
+        disp = std::round(disp / spec.resolution_mm) * spec.resolution_mm;
       pct[k] = 100.0 * disp / spec.length_mm;
     }
     return pct;
@@ -278,11 +293,14 @@ RigRun run_rig(const RigSpec& spec, const Material& material) {
       "creep={:g} creep_tau_s={:g} drift={:g} lonely_stroke={:g} outliers={:g} "
       "minor_loop_noncongruence={:g}",
       e.creep, e.creep_tau_s, e.drift, e.lonely_stroke, e.outliers, e.minor_loop_noncongruence);
-  run.metadata["sensor"] = fmt::format("resolution {:g} mm, noise {:g} mm", spec.resolution_mm, spec.noise_mm);
+  run.metadata["sensor"] =
+      fmt::format("resolution {:g} mm, noise {:g} mm", spec.resolution_mm, spec.noise_mm);
 
-  const std::vector<double> thread = spec.specimen != "scp" ? measure(1.0, 0.0) : std::vector<double>{};
-  const std::vector<double> scp = spec.specimen != "thread" ? measure(gain, spec.scp_offset_pct / 100.0)
-                                                            : std::vector<double>{};
+  const std::vector<double> thread =
+      spec.specimen != "scp" ? measure(1.0, 0.0) : std::vector<double>{};
+  const std::vector<double> scp = spec.specimen != "thread"
+                                      ? measure(gain, spec.scp_offset_pct / 100.0)
+                                      : std::vector<double>{};
   if (spec.specimen == "pair") {
     run.columns = {"time_s", "dwell_s", "load_g", "thread_strain_pct", "scp_strain_pct"};
   } else {
@@ -307,7 +325,8 @@ std::string RigRun::to_csv() const {
   for (std::size_t c = 0; c < columns.size(); ++c) out << (c ? "," : "") << columns[c];
   out << "\n";
   for (const auto& row : rows) {
-    for (std::size_t c = 0; c < row.size(); ++c) out << (c ? "," : "") << fmt::format("{:.10g}", row[c]);
+    for (std::size_t c = 0; c < row.size(); ++c)
+      out << (c ? "," : "") << fmt::format("{:.10g}", row[c]);
     out << "\n";
   }
   return out.str();

@@ -17,8 +17,8 @@
 namespace scpkit {
 
 struct NnlsOptions {
-  int max_iterations = 0;         ///< Lawson-Hanson steps; 0 means 3 * n + 30
-  int warm_start_sweeps = 40;     ///< coordinate-descent sweeps before the exact phase
+  int max_iterations = 0;             ///< Lawson-Hanson steps; 0 means 3 * n + 30
+  int warm_start_sweeps = 40;         ///< coordinate-descent sweeps before the exact phase
   double relative_tolerance = 1e-11;  ///< gradient tolerance, relative to max |f| and diag G
 };
 

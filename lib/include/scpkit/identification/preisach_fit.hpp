@@ -34,10 +34,10 @@ struct PreisachFitOptions {
   /// S: the model is the mean of S fits on grids shifted by h/S (averaged shifted grids,
   /// the ASH idea of Scott 1985), one operator on the h/S grid. 1 = the papers' single grid.
   int grid_shifts = 4;
-  int sign = 0;                ///< +1: densities >= 0; -1: <= 0 (falling response); 0: from data
-  std::optional<double> lo;    ///< lowest threshold; default: smallest input
-  std::optional<double> hi;    ///< highest threshold; default: largest input
-  int folds = 5;               ///< blocks for cross-validation when no block ids are given
+  int sign = 0;              ///< +1: densities >= 0; -1: <= 0 (falling response); 0: from data
+  std::optional<double> lo;  ///< lowest threshold; default: smallest input
+  std::optional<double> hi;  ///< highest threshold; default: largest input
+  int folds = 5;             ///< blocks for cross-validation when no block ids are given
   NnlsOptions nnls;
 
   /// False (with the reason) for impossible settings.
@@ -57,8 +57,8 @@ struct PreisachFitSummary {
   int grid_shifts = 1;  ///< S
   double smoothness = 0.0;
   int sign = 1;
-  int cells = 0;        ///< cells of one L grid
-  int unexcited_cells = 0;      ///< cells whose signed area never changes in the data
+  int cells = 0;                    ///< cells of one L grid
+  int unexcited_cells = 0;          ///< cells whose signed area never changes in the data
   int unidentified_directions = 0;  ///< cells + 1 minus the rank of the regressor
   int nnls_iterations = 0;
   double kkt_violation = 0.0;

@@ -30,11 +30,11 @@ enum class Quantity {
 };
 
 struct MeasurementColumn {
-  std::string name;           ///< as in the header, e.g. "load_g"
+  std::string name;  ///< as in the header, e.g. "load_g"
   Quantity quantity = Quantity::kUnknown;
-  double to_canonical = 1.0;  ///< factor from file units to canonical units
-  int position = 0;           ///< 0-based field index
-  std::vector<double> values; ///< canonical units; empty for kUnknown
+  double to_canonical = 1.0;   ///< factor from file units to canonical units
+  int position = 0;            ///< 0-based field index
+  std::vector<double> values;  ///< canonical units; empty for kUnknown
 };
 
 class Measurement {
@@ -79,7 +79,7 @@ class Measurement {
 
 /// A canonical input or response series picked from a measurement.
 struct Signal {
-  std::string name;  ///< canonical name: load_N, voltage_V, power_W, temp_C, strain, disp_mm
+  std::string name;    ///< canonical name: load_N, voltage_V, power_W, temp_C, strain, disp_mm
   std::string column;  ///< the file's column it came from
   std::vector<double> values;
 };

@@ -24,8 +24,8 @@ struct SpecimenInfo {
 
 struct ModelFile {
   std::string model = "preisach";
-  std::string input;     ///< canonical input name (load_N, voltage_V, power_W, temp_C)
-  std::string response;  ///< canonical response (strain or disp_mm)
+  std::string input;            ///< canonical input name (load_N, voltage_V, power_W, temp_C)
+  std::string response;         ///< canonical response (strain or disp_mm)
   std::string response_column;  ///< the data column it was fitted to, e.g. thread_strain_pct
   PreisachModel preisach{PreisachGrid{}, Eigen::VectorXd::Zero(PreisachGrid{}.cells()), 0.0};
   SpecimenInfo specimen;

@@ -21,7 +21,7 @@ struct Material {
   std::string source;
   double linear_density_dtex = 0.0;  ///< per ply
   double density_kg_m3 = 0.0;
-  double ply_diameter_m = 0.0;       ///< per ply
+  double ply_diameter_m = 0.0;  ///< per ply
   Uncertain tensile_modulus_Pa;
   std::string tensile_modulus_source;
   Uncertain shear_modulus_Pa;

@@ -49,7 +49,7 @@ double paper_eq8_as_printed_gain(double g_p, int p, const CoilGeometry& scp_p, i
                                  const CoilGeometry& scp_q);
 
 /// The q-ply SCP load-to-strain operator: g_q Gamma_p[(p/q) F] + c_p g_q / g_p.
-PreisachModel map_thread_to_scp(const PreisachModel& thread_p, int p, const GainFit& gain_p,
-                                int q, double gain_q);
+PreisachModel map_thread_to_scp(const PreisachModel& thread_p, int p, const GainFit& gain_p, int q,
+                                double gain_q);
 
 }  // namespace scpkit

@@ -30,8 +30,8 @@
 namespace scpkit {
 
 struct LoadProtocol {
-  double min_g = 20.0;   ///< lowest load for a 2-ply thread
-  double max_g = 250.0;  ///< highest load for a 2-ply thread
+  double min_g = 20.0;           ///< lowest load for a 2-ply thread
+  double max_g = 250.0;          ///< highest load for a 2-ply thread
   bool scale_with_plies = true;  ///< loads times plies / 2 (paper 002: 20-250, 40-500, 60-750 g)
   int cycles = 8;                ///< damped oscillation cycles
   int steps_per_half = 8;        ///< readings per half cycle
