@@ -61,15 +61,12 @@ int main(int argc, char** argv) {
       std::cerr << "scpkit " << name << ": " << e.what() << "\n(see scpkit " << name
                 << " --help)\n";
       return kUsageError;
-    } catch (const scpkit::InputError& e) {
-      std::cerr << "scpkit " << name << ": error: " << e.what() << "\n";
-      return kInputError;
-    } catch (const scpkit::IdentificationError& e) {
-      std::cerr << "scpkit " << name << ": error: " << e.what() << "\n";
-      return kInputError;
-    } catch (const scpkit::InvalidArgument& e) {
+    } catch (const scpkit::InvalidArgument& e) {  // a library precondition: bad option value
       std::cerr << "scpkit " << name << ": error: " << e.what() << "\n";
       return kUsageError;
+    } catch (const scpkit::Error& e) {  // InputError, IdentificationError: the data
+      std::cerr << "scpkit " << name << ": error: " << e.what() << "\n";
+      return kInputError;
     } catch (const std::exception& e) {
       std::cerr << "scpkit " << name << ": internal error: " << e.what() << "\n";
       return kInternalError;
