@@ -7,6 +7,7 @@
 #include <random>
 #include <vector>
 
+#include "scpkit/hysteresis/inverse.hpp"
 #include "scpkit/hysteresis/preisach.hpp"
 #include "scpkit/identification/preisach_fit.hpp"
 
@@ -56,6 +57,26 @@ void BM_PreisachForwardStep(benchmark::State& state) {
   state.counters["depth"] = s.depth();
 }
 BENCHMARK(BM_PreisachForwardStep)->Arg(10)->Arg(20)->Arg(40);
+
+// One compensation step: the input that reaches a target from the current memory
+// (target: <= 5 us at L = 20; paper 000: 5.4 ms in MATLAB).
+void BM_PreisachInverseStep(benchmark::State& state) {
+  const int L = static_cast<int>(state.range(0));
+  const PreisachModel model = random_model(L, 6);
+  const std::vector<double> u = test_like_input(1 << 12, 7);
+  PreisachState plant = PreisachState::negative_saturation(model.grid());
+  std::vector<double> targets;
+  for (double v : u) targets.push_back(model.step(plant, v));
+  PreisachInverter inverter(model);
+  PreisachState memory = PreisachState::negative_saturation(model.grid());
+  std::size_t i = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(inverter.step(memory, targets[i]).input);
+    i = (i + 1) & (targets.size() - 1);
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_PreisachInverseStep)->Arg(10)->Arg(20)->Arg(40);
 
 void BM_PreisachIdentification(benchmark::State& state) {
   const int L = static_cast<int>(state.range(0));
