@@ -114,4 +114,72 @@ InverseStep PreisachInverter::step(PreisachState& state, double target) {
   return r;
 }
 
+// ---------------------------------------------------------------- GPI
+
+GpiInverter::GpiInverter(const GpiModel& model) : model_(&model) {
+  model.validate();
+  breaks_.reserve(model.radii.size());
+}
+
+std::pair<double, double> GpiInverter::walk(const GpiState& state, bool up, double target) {
+  const GpiModel& m = *model_;
+  const double g0 = up ? m.right(state.v) : m.left(state.v);
+  const double g1 = up ? m.right(m.v_max) : m.left(m.v_min);
+  breaks_.clear();
+  for (std::size_t j = 0; j < m.radii.size(); ++j) {
+    breaks_.emplace_back(up ? state.w[j] + m.radii[j] : state.w[j] - m.radii[j], m.weights[j]);
+  }
+  if (up) {
+    std::sort(breaks_.begin(), breaks_.end());
+  } else {
+    std::sort(breaks_.begin(), breaks_.end(), std::greater<>());
+  }
+  double g = g0, H = gpi_output(m, state), slope = 0.0;  // slope: dH/dg of the active operators
+  double solution = std::nan("");
+  auto segment = [&](double g_end) {
+    const double H_end = H + slope * (g_end - g);
+    if (std::isnan(solution) && slope != 0.0 && (target - H) * (target - H_end) <= 0.0) {
+      solution = g + (target - H) / slope;
+    }
+    H = H_end;
+    g = g_end;
+  };
+  for (const auto& [gb, p] : breaks_) {
+    if (up ? gb >= g1 : gb <= g1) break;
+    if (up ? gb > g : gb < g) segment(gb);
+    slope += p;
+  }
+  segment(g1);
+  return {H, solution};
+}
+
+InverseStep GpiInverter::step(GpiState& state, double target) {
+  const GpiModel& m = *model_;
+  InverseStep r;
+  const double y0 = gpi_output(m, state);
+  if (target == y0) {
+    r.input = state.v;
+    r.output = y0;
+    return r;
+  }
+  const auto [y_up, g_up] = walk(state, true, target);
+  double v;
+  if (!std::isnan(g_up)) {
+    v = m.right.inverse(g_up);
+  } else {
+    const auto [y_down, g_down] = walk(state, false, target);
+    if (!std::isnan(g_down)) {
+      v = m.left.inverse(g_down);
+    } else {
+      r.reached = false;
+      const double e_up = std::abs(y_up - target), e_down = std::abs(y_down - target);
+      v = e_up <= e_down ? m.v_max : m.v_min;
+      if (std::min(e_up, e_down) >= std::abs(y0 - target)) v = state.v;
+    }
+  }
+  r.input = std::clamp(v, m.v_min, m.v_max);
+  r.output = gpi_step(m, state, r.input);
+  return r;
+}
+
 }  // namespace scpkit

@@ -14,8 +14,10 @@
 // breakpoints, then solve its quadratic. Targets beyond what the input range [u_min, u_max]
 // can reach saturate at the limit and are flagged. The inverter's memory is the plant's:
 // step() applies the chosen input to the state it is given.
+#include <utility>
 #include <vector>
 
+#include "scpkit/hysteresis/gpi.hpp"
 #include "scpkit/hysteresis/preisach.hpp"
 
 namespace scpkit {
@@ -47,6 +49,26 @@ class PreisachInverter {
   double u_min_, u_max_;
   PreisachState scratch_;
   std::vector<double> breaks_;
+};
+
+/// Exact GPI inverse (paper 000 Eqs. 10-11, generalised): along a rising input the operators
+/// follow w_j = max(g - r_j, w_j(t-)) in g = gamma_R(v), so H is piecewise linear in g with
+/// breakpoints g_j = w_j(t-) + r_j; along a falling input w_j = min(g + r_j, w_j(t-)) in
+/// g = gamma_L(v). The target fixes g on the right piece, then v = gamma^-1(g). Works from any
+/// memory and for either weight sign (the paper's printed formulas give negative radii for
+/// negative weights); the branch is chosen by where the target lies, not by the sign of the
+/// target's change alone.
+class GpiInverter {
+ public:
+  explicit GpiInverter(const GpiModel& model);
+  InverseStep step(GpiState& state, double target);
+
+ private:
+  // Output at the end of the rising (up) or falling path, and the g solving the target on
+  // it (NaN when the target lies beyond the end).
+  std::pair<double, double> walk(const GpiState& state, bool up, double target);
+  const GpiModel* model_;
+  std::vector<std::pair<double, double>> breaks_;  // (g_j, p_j)
 };
 
 }  // namespace scpkit

@@ -1,0 +1,118 @@
+// The generalized play operator and GPI model (paper 000 Eqs. 4-7) and their exact inverse.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "scpkit/error.hpp"
+#include "scpkit/hysteresis/gpi.hpp"
+#include "scpkit/hysteresis/inverse.hpp"
+#include "test_support.hpp"
+
+namespace scpkit {
+namespace {
+
+// Paper 000's identified envelopes and radii, with weights of one sign.
+GpiModel paper_model(std::mt19937& rng, double sign) {
+  GpiModel m;
+  m.right = {1.100, 0.048};
+  m.left = {1.236, 0.088};
+  std::uniform_real_distribution<double> U(0.01, 0.3);
+  for (int j = 0; j <= 10; ++j) {
+    m.radii.push_back(j / 10.0);
+    m.weights.push_back(sign * U(rng));
+  }
+  m.bias = 0.396;
+  m.v_min = 0.0;
+  m.v_max = 5.1;
+  m.validate();
+  return m;
+}
+
+TEST(Gpi, StepIsThePaperCaseFormulaOfEq5) {
+  std::mt19937 rng(71);
+  const GpiModel m = paper_model(rng, -1.0);
+  GpiState s = GpiState::at_lower_turning_point(m, 0.0);
+  std::vector<double> w = s.w;  // reference: Eq. 5 case by case
+  double v_prev = 0.0;
+  std::uniform_real_distribution<double> U(0.0, 5.1);
+  for (int t = 0; t < 2000; ++t) {
+    const double v = U(rng);
+    double y = m.bias;
+    for (std::size_t j = 0; j < w.size(); ++j) {
+      if (v > v_prev) w[j] = std::max(m.right(v) - m.radii[j], w[j]);
+      if (v < v_prev) w[j] = std::min(m.left(v) + m.radii[j], w[j]);
+      y += m.weights[j] * w[j];
+    }
+    ASSERT_NEAR(gpi_step(m, s, v), y, 1e-12);
+    v_prev = v;
+  }
+}
+
+TEST(Gpi, IsRateIndependentAndStaysInsideTheBand) {
+  std::mt19937 rng(72);
+  const GpiModel m = paper_model(rng, 1.0);
+  GpiState coarse = GpiState::at_lower_turning_point(m, 0.0), fine = coarse;
+  std::uniform_real_distribution<double> U(0.0, 5.1);
+  double prev = 0.0;
+  for (int t = 0; t < 300; ++t) {
+    const double v = U(rng);
+    double y_fine = 0.0;
+    for (int k = 1; k <= 7; ++k) y_fine = gpi_step(m, fine, prev + (v - prev) * k / 7);
+    ASSERT_NEAR(gpi_step(m, coarse, v), y_fine, 1e-12);
+    for (std::size_t j = 0; j < m.radii.size(); ++j) {
+      ASSERT_GE(coarse.w[j], m.right(v) - m.radii[j] - 1e-12);
+      ASSERT_LE(coarse.w[j], m.left(v) + m.radii[j] + 1e-12);
+    }
+    prev = v;
+  }
+}
+
+TEST(GpiInverse, PaperParametersWithNegativeWeightsRoundTrip) {
+  std::mt19937 rng(73);
+  for (double sign : {-1.0, 1.0}) {
+    for (int trial = 0; trial < 20; ++trial) {
+      const GpiModel m = paper_model(rng, sign);
+      GpiState plant = GpiState::at_lower_turning_point(m, 0.0), memory = plant;
+      GpiInverter inverter(m);
+      std::uniform_real_distribution<double> U(0.0, 5.1);
+      for (int t = 0; t < 300; ++t) {
+        const double v = U(rng);
+        const double target = gpi_step(m, plant, v);
+        const InverseStep s = inverter.step(memory, target);
+        ASSERT_TRUE(s.reached);
+        ASSERT_NEAR(s.output, target, 1e-10) << "sign " << sign << " trial " << trial << " t " << t;
+        // (The input itself need not come back: with gamma_R != gamma_L even the r = 0
+        // operator has a dead band after each reversal, where the output does not move.)
+      }
+    }
+  }
+}
+
+TEST(GpiInverse, SaturatesAndFlagsUnreachableTargets) {
+  std::mt19937 rng(74);
+  const GpiModel m = paper_model(rng, -1.0);
+  GpiState s = GpiState::at_lower_turning_point(m, 1.0);
+  GpiInverter inverter(m);
+  const InverseStep low = inverter.step(s, -100.0);  // below the output at v_max
+  EXPECT_FALSE(low.reached);
+  EXPECT_DOUBLE_EQ(low.input, 5.1);  // negative weights: the lowest output is at the top input
+  const InverseStep high = inverter.step(s, 100.0);
+  EXPECT_FALSE(high.reached);
+  EXPECT_DOUBLE_EQ(high.input, 0.0);
+}
+
+TEST(Gpi, ValidationNamesTheBrokenCondition) {
+  std::mt19937 rng(75);
+  GpiModel m = paper_model(rng, 1.0);
+  m.weights[3] = -0.1;
+  EXPECT_THROW_MSG(m.validate(), InvalidArgument, "one sign");
+  m = paper_model(rng, 1.0);
+  m.right = {1.5, 1.0};  // gamma_R above gamma_L
+  EXPECT_THROW_MSG(m.validate(), InvalidArgument, "order preservation");
+  m = paper_model(rng, 1.0);
+  m.left.a = 0.0;
+  EXPECT_THROW_MSG(m.validate(), InvalidArgument, "strictly increasing");
+}
+
+}  // namespace
+}  // namespace scpkit
