@@ -116,3 +116,43 @@ TEST(Gpi, ValidationNamesTheBrokenCondition) {
 
 }  // namespace
 }  // namespace scpkit
+
+#include "scpkit/identification/gpi_fit.hpp"
+
+namespace scpkit {
+namespace {
+
+std::vector<double> damped_voltage(std::mt19937& rng, int cycles, int per_half, double vmax) {
+  std::vector<double> v{0.0};
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  for (int c = 0; c < cycles; ++c) {
+    const double amp = 1.0 - 0.8 * c / cycles;
+    for (double target : {vmax * (0.5 + 0.5 * amp * (0.7 + 0.3 * U(rng))), vmax * 0.5 * (1.0 - amp) * U(rng)}) {
+      const double from = v.back();
+      for (int k = 1; k <= per_half; ++k) v.push_back(from + (target - from) * k / per_half);
+    }
+  }
+  return v;
+}
+
+TEST(GpiFit, RecoversAKnownGpiAndPredictsUnseenInputs) {
+  std::mt19937 rng(76);
+  GpiModel truth = paper_model(rng, -1.0);
+  // The fit's radii: 11 operators up to a quarter of the input range; give the truth the same.
+  for (int j = 0; j <= 10; ++j) truth.radii[j] = 0.25 * 5.1 * j / 10.0;
+  truth.validate();
+  const auto v = damped_voltage(rng, 12, 8, 5.1);
+  GpiState s = GpiState::at_lower_turning_point(truth, v.front());
+  const auto y = gpi_simulate(truth, s, v);
+  const GpiFit fit = fit_gpi(v, y, {}, GpiFitOptions{});
+  EXPECT_LT(fit.summary.train.rms_pct_range, 0.05) << fit.summary.BriefReport();
+  EXPECT_LE(fit.model.weights.front(), 0.0);
+  // Unseen inputs inside the identified range (the model clamps outside it).
+  const auto v2 = damped_voltage(rng, 6, 5, *std::max_element(v.begin(), v.end()));
+  GpiState a = GpiState::at_lower_turning_point(truth, 0.0), b = GpiState::at_lower_turning_point(fit.model, 0.0);
+  const auto y_true = gpi_simulate(truth, a, v2), y_fit = gpi_simulate(fit.model, b, v2);
+  EXPECT_LT(error_metrics(y_true, y_fit).rms_pct_range, 0.5);
+}
+
+}  // namespace
+}  // namespace scpkit
