@@ -1,11 +1,14 @@
 // scpkit fit DATA.csv: identify a Preisach model (and, for paired thread/SCP data, the SCP gain).
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <filesystem>
 #include <iostream>
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "scpkit/identification/gpi_fit.hpp"
+#include "scpkit/identification/polynomial_fit.hpp"
 #include "scpkit/identification/preisach_fit.hpp"
 #include "scpkit/io/model_file.hpp"
 #include "scpkit/mechanics/ply_mapping.hpp"
@@ -51,9 +54,12 @@ int run_fit(const std::vector<std::string>& args) {
   po::options_description opt("options");
   opt.add_options()("help,h", "show this help")(
       "model", po::value<std::string>()->default_value("preisach"),
-      "model: preisach (gpi, linear, poly2, lonely: not in this version)")(
-      "output,o", po::value<std::string>(),
-      "model file to write (default: DATA stem + .model.json)")(
+      "model: preisach, gpi, linear, poly2 (lonely: not in this version)")(
+      "operators", po::value<int>()->default_value(11), "GPI: number of play operators N + 1")(
+      "max-radius", po::value<double>(),
+      "GPI: largest play radius, in the input column's units (default: a quarter of the input "
+      "range)")("output,o", po::value<std::string>(),
+                "model file to write (default: DATA stem + .model.json)")(
       "input", po::value<std::string>()->default_value(""),
       "input quantity when several vary: load, voltage, power, temp")(
       "response", po::value<std::string>()->default_value(""),
@@ -76,12 +82,12 @@ int run_fit(const std::vector<std::string>& args) {
   if (!parse_command_line(args, kUsage, kAbout, opt, {"DATA"}, vm)) return kOk;
 
   const std::string model_kind = vm["model"].as<std::string>();
-  if (model_kind != "preisach") {
-    if (model_kind == "gpi" || model_kind == "linear" || model_kind == "poly2" ||
-        model_kind == "lonely") {
-      throw UsageError(fmt::format(
-          "model '{}' is not available in this version of scpkit (only preisach)", model_kind));
-    }
+  if (model_kind == "lonely") {
+    throw UsageError(
+        "model 'lonely' is not available in this version of scpkit (preisach, gpi, linear, poly2)");
+  }
+  if (model_kind != "preisach" && model_kind != "gpi" && model_kind != "linear" &&
+      model_kind != "poly2") {
     throw UsageError(
         fmt::format("unknown model '{}' (preisach, gpi, linear, poly2, lonely)", model_kind));
   }
@@ -121,27 +127,81 @@ int run_fit(const std::vector<std::string>& args) {
   if (const MeasurementColumn* seg = m.find(Quantity::kSegment)) {
     for (double v : seg->values) blocks.push_back(static_cast<int>(v));
   }
-  PreisachFit fit = [&] {
-    try {
-      return fit_preisach(in.values, out.values, blocks, fo);
-    } catch (const IdentificationError& e) {
-      rethrow_at_column(m, out.column, std::string("cannot identify the model: ") + e.what());
+  // Fit the chosen family; every branch yields the operator, its identification errors, a
+  // report and the family's JSON details.
+  std::optional<HysteresisOperator> op;
+  ErrorMetrics train;
+  double cv_rms = -1.0;
+  std::string report;
+  nlohmann::json details = nlohmann::json::object();
+  try {
+    if (model_kind == "preisach") {
+      const PreisachFit fit = fit_preisach(in.values, out.values, blocks, fo);
+      op.emplace(fit.model);
+      train = fit.summary.train;
+      cv_rms = fit.summary.cv_rms_pct_range;
+      report = fit.summary.BriefReport();
+      details["levels"] = fit.summary.levels;
+      details["smoothness"] = fit.summary.smoothness;
+      details["grid_shifts"] = fit.summary.grid_shifts;
+      details["sign"] = fit.summary.sign;
+      details["unexcited_cells"] = fit.summary.unexcited_cells;
+      details["unidentified_directions"] = fit.summary.unidentified_directions;
+      details["converged"] = fit.summary.termination == PreisachFitSummary::Termination::kConverged;
+      details["warnings"] = fit.summary.warnings;
+      nlohmann::json cv = nlohmann::json::array();
+      for (const auto& p : fit.summary.cross_validation) {
+        cv.push_back({{"levels", p.levels},
+                      {"smoothness", p.smoothness},
+                      {"rms_pct_range", p.rms_pct_range}});
+      }
+      details["cross_validation"] = cv;
+    } else if (model_kind == "gpi") {
+      GpiFitOptions go;
+      go.operators = vm["operators"].as<int>();
+      go.sign = fo.sign;
+      if (vm.count("max-radius")) go.max_radius = vm["max-radius"].as<double>() * in_factor;
+      std::string why_gpi;
+      if (!go.IsValid(&why_gpi)) throw UsageError(why_gpi);
+      const GpiFit fit = fit_gpi(in.values, out.values, {}, go);
+      op.emplace(fit.model);
+      train = fit.summary.train;
+      report = fit.summary.BriefReport();
+      details["operators"] = go.operators;
+      details["converged"] = fit.summary.converged;
+      details["envelopes"] = {{"aR", fit.model.right.a},
+                              {"bR", fit.model.right.b},
+                              {"aL", fit.model.left.a},
+                              {"bL", fit.model.left.b}};
+    } else {
+      const int degree = model_kind == "linear" ? 1 : 2;
+      const PolynomialModel poly = fit_polynomial(in.values, out.values, degree);
+      op.emplace(poly);
+      const std::vector<double> y = op->simulate(in.values);
+      train = error_metrics(out.values, y);
+      report = fmt::format(
+          "{} fit: coefficients {}\n  identification: E_max {:.3f} %, E_RMS {:.3f} % of the "
+          "response range",
+          model_kind, fmt::join(poly.coefficients, ", "), train.max_pct_range, train.rms_pct_range);
+      details["coefficients"] = poly.coefficients;
     }
-  }();
+  } catch (const IdentificationError& e) {
+    rethrow_at_column(m, out.column, std::string("cannot identify the model: ") + e.what());
+  }
 
   ModelFile mf;
   mf.input = in.name;
   mf.response = out.name;
   mf.response_column = out.column;
-  mf.preisach = fit.model;
+  mf.op = *op;
   mf.specimen.specimen = m.meta("specimen").value_or("");
   mf.specimen.material = m.meta("material").value_or("");
   mf.specimen.plies = m.meta_positive_int("plies").value_or(0);
   mf.specimen.length_mm = m.meta_number("length_mm").value_or(0.0);
   mf.specimen.coil = coil_from_metadata(m);
   const double scale = display_scale(out.name);
-  mf.fit_metrics = fit.summary.train.scaled(scale);
-  mf.cv_rms_pct_range = fit.summary.cv_rms_pct_range;
+  mf.fit_metrics = train.scaled(scale);
+  mf.cv_rms_pct_range = cv_rms;
   mf.data_file = data_path;
   if (paired) {
     try {
@@ -160,25 +220,12 @@ int run_fit(const std::vector<std::string>& args) {
   if (vm.count("json")) {
     nlohmann::json j = metrics_json(mf.fit_metrics);
     j["model_file"] = model_path;
-    j["model"] = "preisach";
+    j["model"] = model_kind;
     j["input"] = in.name;
     j["response"] = out.name;
     j["response_unit"] = unit;
-    j["levels"] = fit.summary.levels;
-    j["smoothness"] = fit.summary.smoothness;
-    j["grid_shifts"] = fit.summary.grid_shifts;
-    j["sign"] = fit.summary.sign;
-    j["unexcited_cells"] = fit.summary.unexcited_cells;
-    j["unidentified_directions"] = fit.summary.unidentified_directions;
-    j["cv_rms_pct_range"] = fit.summary.cv_rms_pct_range;
-    j["converged"] = fit.summary.termination == PreisachFitSummary::Termination::kConverged;
-    j["warnings"] = fit.summary.warnings;
-    nlohmann::json cv = nlohmann::json::array();
-    for (const auto& p : fit.summary.cross_validation) {
-      cv.push_back(
-          {{"levels", p.levels}, {"smoothness", p.smoothness}, {"rms_pct_range", p.rms_pct_range}});
-    }
-    j["cross_validation"] = cv;
+    j["cv_rms_pct_range"] = cv_rms;
+    j.update(details);
     if (mf.scp_gain) {
       j["scp_gain"] = {{"gain", mf.scp_gain->gain},
                        {"offset_pct", 100.0 * mf.scp_gain->offset},
@@ -188,7 +235,7 @@ int run_fit(const std::vector<std::string>& args) {
   } else {
     std::cout << fmt::format("{}: {} rows, input {} ({}), response {} ({})\n", data_path, m.rows(),
                              in.column, display_unit(in.name), out.column, unit);
-    std::cout << fit.summary.BriefReport() << "\n";
+    std::cout << report << "\n";
     std::cout << fmt::format("  errors: {}\n", mf.fit_metrics.brief(unit));
     if (mf.scp_gain) {
       std::cout << fmt::format(

@@ -94,7 +94,12 @@ int run_map(const std::vector<std::string>& args) {
     coil_q = material->geometry_for(q)->coil;
   }
 
-  const PreisachModel& thread_p = mf.preisach;
+  if (!mf.preisach()) {
+    throw InputError(
+        vm["MODEL"].as<std::string>(), 0, 0,
+        fmt::format("map needs a Preisach thread model, this one is {}", mf.op.family()));
+  }
+  const PreisachModel& thread_p = *mf.preisach();
   std::vector<Prediction> preds;
   preds.push_back({"thread", map_thread_plies(thread_p, p, q)});
   preds.push_back({"thread_paper_eq7_as_printed", paper_eq7_as_printed(thread_p, p, q)});

@@ -33,8 +33,7 @@ int run_predict(const std::vector<std::string>& args) {
   const ModelFile mf = load_model(vm["MODEL"].as<std::string>());
   const Measurement m = Measurement::read(vm["DATA"].as<std::string>());
   const Signal in = select_input(m, mf.input);
-  PreisachState state = PreisachState::negative_saturation(mf.preisach.grid());
-  const Eigen::VectorXd y = mf.preisach.simulate(state, in.values);
+  const std::vector<double> y = mf.op.simulate(in.values);
 
   // The measured response, if any: the fitted column when present, else the usual choice.
   std::optional<Signal> measured;
@@ -71,13 +70,12 @@ int run_predict(const std::vector<std::string>& args) {
   if (out_col) {
     predicted_name = "predicted_" + out_col->name;
     for (std::size_t r = 0; r < m.rows(); ++r) {
-      predicted_col[r] =
-          to_column_units(y[static_cast<Eigen::Index>(r)], *out_col, length_mm, mf.response);
+      predicted_col[r] = to_column_units(y[r], *out_col, length_mm, mf.response);
     }
   } else {
     predicted_name = mf.response == "strain" ? "predicted_strain_pct" : "predicted_disp_mm";
     for (std::size_t r = 0; r < m.rows(); ++r) {
-      predicted_col[r] = y[static_cast<Eigen::Index>(r)] * display_scale(mf.response);
+      predicted_col[r] = y[r] * display_scale(mf.response);
     }
   }
 
@@ -92,13 +90,12 @@ int run_predict(const std::vector<std::string>& args) {
 
   std::optional<ErrorMetrics> err;
   if (measured) {
-    err = error_metrics(measured->values,
-                        std::span<const double>(y.data(), static_cast<std::size_t>(y.size())))
-              .scaled(display_scale(mf.response));
+    err = error_metrics(measured->values, y).scaled(display_scale(mf.response));
   }
   if (vm.count("json")) {
     nlohmann::json j = err ? metrics_json(*err) : nlohmann::json::object();
     j["rows"] = m.rows();
+    j["model"] = mf.op.family();
     j["input"] = in.name;
     j["response"] = mf.response;
     j["response_unit"] = display_unit(mf.response);

@@ -44,7 +44,12 @@ for c in fit predict map simulate; do
 done
 check "unknown option" 2 "unrecognised option|unrecognized option" -- "$bin" fit "$ex/pair-2ply.csv" --bogus
 check "missing positional" 2 "missing DATA" -- "$bin" fit
-check "model not in this version" 2 "not available" -- "$bin" fit "$ex/pair-2ply.csv" --model gpi
+check "model not in this version" 2 "not available" -- "$bin" fit "$ex/pair-2ply.csv" --model lonely
+check "unknown model" 2 "unknown model 'spline'" -- "$bin" fit "$ex/pair-2ply.csv" --model spline
+for mdl in gpi linear poly2; do
+  check "fit --model $mdl" 0 "identification: E_max" -- "$bin" fit "$ex/pair-2ply.csv" --model $mdl -o "$work/$mdl.json"
+  check "predict with a $mdl model" 0 "\"model\": \"$mdl\"" -- "$bin" predict "$work/$mdl.json" "$ex/pair-2ply.csv" --json
+done
 
 # The main job.
 check "fit paired 2-ply" 0 "SCP gain: scp = [0-9.]+ \* thread" -- "$bin" fit "$ex/pair-2ply.csv" -o "$work/m2.json"

@@ -1,10 +1,11 @@
 // The generalized play operator and GPI model (paper 000 Eqs. 4-7) and their exact inverse.
+#include "scpkit/hysteresis/gpi.hpp"
+
 #include <gtest/gtest.h>
 
 #include <random>
 
 #include "scpkit/error.hpp"
-#include "scpkit/hysteresis/gpi.hpp"
 #include "scpkit/hysteresis/inverse.hpp"
 #include "test_support.hpp"
 
@@ -127,7 +128,8 @@ std::vector<double> damped_voltage(std::mt19937& rng, int cycles, int per_half, 
   std::uniform_real_distribution<double> U(0.0, 1.0);
   for (int c = 0; c < cycles; ++c) {
     const double amp = 1.0 - 0.8 * c / cycles;
-    for (double target : {vmax * (0.5 + 0.5 * amp * (0.7 + 0.3 * U(rng))), vmax * 0.5 * (1.0 - amp) * U(rng)}) {
+    for (double target :
+         {vmax * (0.5 + 0.5 * amp * (0.7 + 0.3 * U(rng))), vmax * 0.5 * (1.0 - amp) * U(rng)}) {
       const double from = v.back();
       for (int k = 1; k <= per_half; ++k) v.push_back(from + (target - from) * k / per_half);
     }
@@ -149,7 +151,8 @@ TEST(GpiFit, RecoversAKnownGpiAndPredictsUnseenInputs) {
   EXPECT_LE(fit.model.weights.front(), 0.0);
   // Unseen inputs inside the identified range (the model clamps outside it).
   const auto v2 = damped_voltage(rng, 6, 5, *std::max_element(v.begin(), v.end()));
-  GpiState a = GpiState::at_lower_turning_point(truth, 0.0), b = GpiState::at_lower_turning_point(fit.model, 0.0);
+  GpiState a = GpiState::at_lower_turning_point(truth, 0.0),
+           b = GpiState::at_lower_turning_point(fit.model, 0.0);
   const auto y_true = gpi_simulate(truth, a, v2), y_fit = gpi_simulate(fit.model, b, v2);
   EXPECT_LT(error_metrics(y_true, y_fit).rms_pct_range, 0.5);
 }

@@ -9,7 +9,8 @@ namespace scpkit {
 
 void GpiModel::validate() const {
   if (radii.empty() || radii.size() != weights.size()) {
-    throw_invalid("GPI model needs one weight per radius ({} radii, {} weights)", radii.size(), weights.size());
+    throw_invalid("GPI model needs one weight per radius ({} radii, {} weights)", radii.size(),
+                  weights.size());
   }
   for (std::size_t j = 0; j < radii.size(); ++j) {
     if (!(radii[j] >= 0.0) || (j > 0 && !(radii[j] > radii[j - 1]))) {
@@ -18,13 +19,16 @@ void GpiModel::validate() const {
     if (!std::isfinite(weights[j])) throw_invalid("GPI weight {} is not finite", j);
   }
   if (!(right.a > 0.0) || !(left.a > 0.0)) {
-    throw_invalid("GPI envelopes must be strictly increasing (a_R = {}, a_L = {})", right.a, left.a);
+    throw_invalid("GPI envelopes must be strictly increasing (a_R = {}, a_L = {})", right.a,
+                  left.a);
   }
   if (!(v_min < v_max)) throw_invalid("GPI input range [{}, {}] is empty", v_min, v_max);
   for (double v : {v_min, v_max}) {
     if (right(v) - radii.front() > left(v) + radii.front() + 1e-12) {
-      throw_invalid("GPI envelopes break order preservation at v = {}: gamma_R - r_0 = {} > gamma_L + r_0 = {}",
-                    v, right(v) - radii.front(), left(v) + radii.front());
+      throw_invalid(
+          "GPI envelopes break order preservation at v = {}: gamma_R - r_0 = {} > gamma_L + r_0 = "
+          "{}",
+          v, right(v) - radii.front(), left(v) + radii.front());
     }
   }
   bool pos = false, neg = false;

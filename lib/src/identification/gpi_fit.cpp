@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 #include "scpkit/error.hpp"
@@ -13,11 +14,13 @@
 namespace scpkit {
 namespace {
 
-// theta = (a_R, b_R, d_min, d_max) -> envelopes.
+// theta = (a_R, d_min, d_max) -> envelopes. A shift common to both envelopes moves every
+// operator (and its initial state) by the same amount, which the free bias absorbs: it is
+// not identifiable, so gamma_R(v_min) = 0 fixes it.
 GpiModel shape_from(const double* theta, const GpiModel& base) {
   GpiModel m = base;
-  m.right = {theta[0], theta[1]};
-  const double lmin = m.right(m.v_min) + theta[2], lmax = m.right(m.v_max) + theta[3];
+  m.right = {theta[0], -theta[0] * base.v_min};
+  const double lmin = m.right(m.v_min) + theta[1], lmax = m.right(m.v_max) + theta[2];
   m.left.a = (lmax - lmin) / (m.v_max - m.v_min);
   m.left.b = lmin - m.left.a * m.v_min;
   return m;
@@ -89,7 +92,8 @@ std::vector<std::vector<double>> gpi_operator_outputs(const GpiModel& shape,
   std::vector<std::vector<double>> cols(shape.radii.size(), std::vector<double>(n));
   GpiState s;
   for (std::size_t t = 0; t < n; ++t) {
-    if (t == 0 || (!starts.empty() && starts[t])) s = GpiState::at_lower_turning_point(shape, input[t]);
+    if (t == 0 || (!starts.empty() && starts[t]))
+      s = GpiState::at_lower_turning_point(shape, input[t]);
     const double v = std::clamp(input[t], shape.v_min, shape.v_max);
     const double gr = shape.right(v), gl = shape.left(v);
     for (std::size_t j = 0; j < shape.radii.size(); ++j) {
@@ -106,11 +110,13 @@ GpiFit fit_gpi(std::span<const double> input, std::span<const double> output,
   std::string why;
   if (!options.IsValid(&why)) throw InvalidArgument("GPI fit options: " + why);
   const std::size_t n = input.size();
-  if (output.size() != n || (!starts.empty() && starts.size() != n)) throw_invalid("GPI fit: sizes differ");
+  if (output.size() != n || (!starts.empty() && starts.size() != n))
+    throw_invalid("GPI fit: sizes differ");
   const std::size_t unknowns = static_cast<std::size_t>(options.operators) + 5;
   if (n < 2 * unknowns) {
-    throw IdentificationError(fmt::format("{} samples are too few for a GPI model with {} operators (need >= {})",
-                                          n, options.operators, 2 * unknowns));
+    throw IdentificationError(
+        fmt::format("{} samples are too few for a GPI model with {} operators (need >= {})", n,
+                    options.operators, 2 * unknowns));
   }
   for (std::size_t t = 0; t < n; ++t) {
     if (!std::isfinite(input[t]) || !std::isfinite(output[t])) {
@@ -120,7 +126,8 @@ GpiFit fit_gpi(std::span<const double> input, std::span<const double> output,
   const auto [vmin, vmax] = std::minmax_element(input.begin(), input.end());
   const auto [ymin, ymax] = std::minmax_element(output.begin(), output.end());
   if (!(*vmax > *vmin)) throw IdentificationError("the input never changes: nothing to identify");
-  if (!(*ymax > *ymin)) throw IdentificationError("the response never changes: nothing to identify");
+  if (!(*ymax > *ymin))
+    throw IdentificationError("the response never changes: nothing to identify");
   int sign = options.sign;
   if (sign == 0) {
     const double vm = std::accumulate(input.begin(), input.end(), 0.0) / static_cast<double>(n);
@@ -140,24 +147,36 @@ GpiFit fit_gpi(std::span<const double> input, std::span<const double> output,
     base.radii.push_back(N == 1 ? 0.0 : rmax * j / (N - 1));
     base.weights.push_back(0.0);
   }
-  double theta[4] = {1.0, 0.0, 0.02 * range, 0.02 * range};
-
-  auto* functor = new VarProCost{&base, input, output, starts, sign};
-  auto* cost = new ceres::DynamicNumericDiffCostFunction<VarProCost, ceres::CENTRAL>(functor);
-  cost->AddParameterBlock(4);
-  cost->SetNumResiduals(static_cast<int>(n));
-  ceres::Problem problem;
-  problem.AddResidualBlock(cost, nullptr, theta);
-  problem.SetParameterLowerBound(theta, 0, 1e-3);
-  problem.SetParameterLowerBound(theta, 2, 0.0);
-  problem.SetParameterLowerBound(theta, 3, 0.0);
-  ceres::Solver::Options so;
-  so.max_num_iterations = options.max_iterations;
-  so.linear_solver_type = ceres::DENSE_QR;
-  so.logging_type = ceres::SILENT;
-  so.num_threads = 1;
+  // A few starts (slope, band width): the cost is not convex in the envelopes.
+  double theta[3] = {1.0, 0.02 * range, 0.02 * range};
   ceres::Solver::Summary summary;
-  ceres::Solve(so, &problem, &summary);
+  double best_cost = std::numeric_limits<double>::infinity();
+  for (const double a0 : {1.0, 3.0}) {
+    for (const double d0 : {0.02, 0.3}) {
+      double t[3] = {a0, d0 * range, d0 * range};
+      auto* functor = new VarProCost{&base, input, output, starts, sign};
+      auto* cost = new ceres::DynamicNumericDiffCostFunction<VarProCost, ceres::CENTRAL>(functor);
+      cost->AddParameterBlock(3);
+      cost->SetNumResiduals(static_cast<int>(n));
+      ceres::Problem problem;
+      problem.AddResidualBlock(cost, nullptr, t);
+      problem.SetParameterLowerBound(t, 0, 1e-3);
+      problem.SetParameterLowerBound(t, 1, 0.0);
+      problem.SetParameterLowerBound(t, 2, 0.0);
+      ceres::Solver::Options so;
+      so.max_num_iterations = options.max_iterations;
+      so.linear_solver_type = ceres::DENSE_QR;
+      so.logging_type = ceres::SILENT;
+      so.num_threads = 1;
+      ceres::Solver::Summary s;
+      ceres::Solve(so, &problem, &s);
+      if (s.final_cost < best_cost) {
+        best_cost = s.final_cost;
+        std::copy(t, t + 3, theta);
+        summary = s;
+      }
+    }
+  }
 
   GpiFit fit;
   fit.model = shape_from(theta, base);
@@ -177,10 +196,11 @@ GpiFit fit_gpi(std::span<const double> input, std::span<const double> output,
 }
 
 std::string GpiFitSummary::BriefReport() const {
-  return fmt::format("GPI fit: {} after {} Ceres iterations (cost {:.4g} -> {:.4g})\n"
-                     "  identification: E_max {:.3f} %, E_RMS {:.3f} % of the response range",
-                     converged ? "converged" : "stopped (" + message + ")", iterations, initial_cost,
-                     final_cost, train.max_pct_range, train.rms_pct_range);
+  return fmt::format(
+      "GPI fit: {} after {} Ceres iterations (cost {:.4g} -> {:.4g})\n"
+      "  identification: E_max {:.3f} %, E_RMS {:.3f} % of the response range",
+      converged ? "converged" : "stopped (" + message + ")", iterations, initial_cost, final_cost,
+      train.max_pct_range, train.rms_pct_range);
 }
 
 }  // namespace scpkit

@@ -10,23 +10,85 @@ namespace scpkit {
 
 using nlohmann::json;
 
+namespace {
+
+json operator_json(const HysteresisOperator& op) {
+  json j;
+  j["family"] = op.family();
+  if (const auto* p = std::get_if<PreisachModel>(&op.model())) {
+    const PreisachGrid& g = p->grid();
+    j["preisach"] = {
+        {"lo", g.lo},
+        {"hi", g.hi},
+        {"levels", g.levels},
+        {"bias", p->bias()},
+        {"weights", std::vector<double>(p->weights().begin(), p->weights().end())},
+        {"weights_are", "cell masses, row-major over beta level i then alpha level j >= i"}};
+  } else if (const auto* m = std::get_if<GpiModel>(&op.model())) {
+    j["gpi"] = {{"right", {{"a", m->right.a}, {"b", m->right.b}}},
+                {"left", {{"a", m->left.a}, {"b", m->left.b}}},
+                {"radii", m->radii},
+                {"weights", m->weights},
+                {"bias", m->bias},
+                {"v_min", m->v_min},
+                {"v_max", m->v_max}};
+  } else {
+    const auto& poly = std::get<PolynomialModel>(op.model());
+    j["polynomial"] = {
+        {"coefficients", poly.coefficients}, {"v_min", poly.v_min}, {"v_max", poly.v_max}};
+  }
+  return j;
+}
+
+HysteresisOperator operator_from_json(const json& j) {
+  const std::string family = j.at("family").get<std::string>();
+  if (family == "preisach") {
+    const json& p = j.at("preisach");
+    PreisachGrid g{p.at("lo").get<double>(), p.at("hi").get<double>(), p.at("levels").get<int>()};
+    const auto w = p.at("weights").get<std::vector<double>>();
+    return HysteresisOperator(PreisachModel(
+        g, Eigen::Map<const Eigen::VectorXd>(w.data(), static_cast<Eigen::Index>(w.size())),
+        p.at("bias").get<double>()));
+  }
+  if (family == "gpi") {
+    const json& p = j.at("gpi");
+    GpiModel m;
+    m.right = {p.at("right").at("a").get<double>(), p.at("right").at("b").get<double>()};
+    m.left = {p.at("left").at("a").get<double>(), p.at("left").at("b").get<double>()};
+    m.radii = p.at("radii").get<std::vector<double>>();
+    m.weights = p.at("weights").get<std::vector<double>>();
+    m.bias = p.at("bias").get<double>();
+    m.v_min = p.at("v_min").get<double>();
+    m.v_max = p.at("v_max").get<double>();
+    m.validate();
+    return HysteresisOperator(m);
+  }
+  if (family == "linear" || family == "poly2") {
+    const json& p = j.at("polynomial");
+    PolynomialModel poly;
+    poly.coefficients = p.at("coefficients").get<std::vector<double>>();
+    poly.v_min = p.at("v_min").get<double>();
+    poly.v_max = p.at("v_max").get<double>();
+    if (poly.coefficients.size() != (family == "linear" ? 2u : 3u) || !(poly.v_min < poly.v_max)) {
+      throw InvalidArgument("polynomial model: wrong number of coefficients or empty range");
+    }
+    return HysteresisOperator(poly);
+  }
+  throw InvalidArgument("unknown operator family '" + family + "'");
+}
+
+}  // namespace
+
 void save_model(const std::filesystem::path& path, const ModelFile& m) {
   json j;
   j["format"] = "scpkit-model";
   j["version"] = 1;
   j["scpkit"] = kVersion;
-  j["model"] = m.model;
+  j["model"] = m.op.family();
   j["input"] = m.input;
   j["response"] = m.response;
   j["response_column"] = m.response_column;
-  const PreisachGrid& g = m.preisach.grid();
-  j["preisach"] = {
-      {"lo", g.lo},
-      {"hi", g.hi},
-      {"levels", g.levels},
-      {"bias", m.preisach.bias()},
-      {"weights", std::vector<double>(m.preisach.weights().begin(), m.preisach.weights().end())},
-      {"weights_are", "cell masses, row-major over beta level i then alpha level j >= i"}};
+  j["operator"] = operator_json(m.op);
   json s;
   s["specimen"] = m.specimen.specimen;
   s["material"] = m.specimen.material;
@@ -77,19 +139,12 @@ ModelFile load_model(const std::filesystem::path& path) {
       throw InputError(name, 0, 0, "not an scpkit model file (format is not 'scpkit-model')");
     if (j.value("version", 0) != 1) throw InputError(name, 0, 0, "unsupported model file version");
     ModelFile m;
-    m.model = j.at("model").get<std::string>();
-    if (m.model != "preisach") throw InputError(name, 0, 0, "unknown model '" + m.model + "'");
     m.input = j.at("input").get<std::string>();
     m.response = j.at("response").get<std::string>();
     m.response_column = j.value("response_column", "");
     if (m.response != "strain" && m.response != "disp_mm")
       throw InputError(name, 0, 0, "unknown response '" + m.response + "'");
-    const json& p = j.at("preisach");
-    PreisachGrid g{p.at("lo").get<double>(), p.at("hi").get<double>(), p.at("levels").get<int>()};
-    const auto w = p.at("weights").get<std::vector<double>>();
-    m.preisach = PreisachModel(
-        g, Eigen::Map<const Eigen::VectorXd>(w.data(), static_cast<Eigen::Index>(w.size())),
-        p.at("bias").get<double>());
+    m.op = operator_from_json(j.at("operator"));
     const json& s = j.at("specimen");
     m.specimen.specimen = s.value("specimen", "");
     m.specimen.material = s.value("material", "");

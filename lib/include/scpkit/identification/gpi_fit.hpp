@@ -4,9 +4,10 @@
 // Variable projection: the weights and the bias enter linearly, so for given envelopes they
 // are the exact sign-constrained least-squares answer (solve_nnls, one sign for every weight:
 // every partial sum keeps that sign, so the model stays invertible); Ceres minimises the
-// remaining residual over the four envelope parameters, parametrised so that order
+// remaining residual over three envelope parameters, parametrised so that order
 // preservation holds by construction:
-//   gamma_R(v) = a_R v + b_R,  a_R > 0
+//   gamma_R(v) = a_R (v - v_min),  a_R > 0   (a shift common to both envelopes is absorbed
+//                                              by the bias c, so b_R is fixed)
 //   gamma_L(v_min) = gamma_R(v_min) + d_min,  gamma_L(v_max) = gamma_R(v_max) + d_max,
 //   d_min, d_max >= 0  (so gamma_R <= gamma_L on the whole range).
 // Radii are fixed, r_j = j / (N) * max_radius (paper 000: 11 operators, r_j = j / 10).
@@ -19,10 +20,10 @@
 namespace scpkit {
 
 struct GpiFitOptions {
-  int operators = 11;         ///< N + 1
-  double max_radius = -1.0;   ///< largest radius; < 0: a quarter of the input range
-  int sign = 0;               ///< +1 / -1 weights; 0: from the data
-  int max_iterations = 200;   ///< Ceres iterations
+  int operators = 11;        ///< N + 1
+  double max_radius = -1.0;  ///< largest radius; < 0: a quarter of the input range
+  int sign = 0;              ///< +1 / -1 weights; 0: from the data
+  int max_iterations = 200;  ///< Ceres iterations
   bool IsValid(std::string* why) const;
 };
 

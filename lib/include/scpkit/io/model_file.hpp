@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 
+#include "scpkit/hysteresis/operator.hpp"
 #include "scpkit/hysteresis/preisach.hpp"
 #include "scpkit/identification/preisach_fit.hpp"
 #include "scpkit/mechanics/coil.hpp"
@@ -23,11 +24,13 @@ struct SpecimenInfo {
 };
 
 struct ModelFile {
-  std::string model = "preisach";
   std::string input;            ///< canonical input name (load_N, voltage_V, power_W, temp_C)
   std::string response;         ///< canonical response (strain or disp_mm)
   std::string response_column;  ///< the data column it was fitted to, e.g. thread_strain_pct
-  PreisachModel preisach{PreisachGrid{}, Eigen::VectorXd::Zero(PreisachGrid{}.cells()), 0.0};
+  HysteresisOperator op{
+      PreisachModel{PreisachGrid{}, Eigen::VectorXd::Zero(PreisachGrid{}.cells()), 0.0}};
+  /// The Preisach model, or nullptr for another family.
+  const PreisachModel* preisach() const { return std::get_if<PreisachModel>(&op.model()); }
   SpecimenInfo specimen;
   std::optional<GainFit> scp_gain;  ///< SCP strain vs thread strain, from paired data
   ErrorMetrics fit_metrics;
