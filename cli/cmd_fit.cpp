@@ -137,7 +137,7 @@ int run_fit(const std::vector<std::string>& args) {
   try {
     if (model_kind == "preisach") {
       const PreisachFit fit = fit_preisach(in.values, out.values, blocks, fo);
-      op.emplace(fit.model);
+      op.emplace(fit.model, fit.input_min, fit.input_max);
       train = fit.summary.train;
       cv_rms = fit.summary.cv_rms_pct_range;
       report = fit.summary.BriefReport();

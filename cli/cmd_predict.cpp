@@ -35,35 +35,9 @@ int run_predict(const std::vector<std::string>& args) {
   const Signal in = select_input(m, mf.input);
   const std::vector<double> y = mf.op.simulate(in.values);
 
-  // The measured response, if any: the fitted column when present, else the usual choice.
-  std::optional<Signal> measured;
-  const MeasurementColumn* out_col = nullptr;
-  for (const auto& c : m.columns()) {
-    if (c.name == mf.response_column) out_col = &c;
-  }
-  if (out_col) {
-    measured = Signal{mf.response, out_col->name, out_col->values};
-    if (out_col->quantity == Quantity::kDisplacement && mf.response == "strain") {
-      measured = select_response(m, "");
-    }
-  } else {
-    try {
-      measured = select_response(m, mf.response == "disp_mm" ? "disp_mm" : "");
-      for (const auto& c : m.columns()) {
-        if (c.name == measured->column) out_col = &c;
-      }
-      if (measured->name != mf.response) {
-        throw InputError(
-            m.source(), m.header_line(), 0,
-            fmt::format(
-                "the model predicts {} but the file's response is {} (give length_mm metadata?)",
-                mf.response, measured->name));
-      }
-    } catch (const InputError& e) {
-      if (e.message().find("no response column") == std::string::npos) throw;
-      measured.reset();
-    }
-  }
+  const ResponseColumn found = find_response(m, mf);
+  const std::optional<Signal>& measured = found.signal;
+  const MeasurementColumn* out_col = found.column;
   const double length_mm = m.meta_number("length_mm").value_or(mf.specimen.length_mm);
   std::string predicted_name;
   std::vector<double> predicted_col(m.rows());

@@ -8,5 +8,6 @@ int run_fit(const std::vector<std::string>& args);
 int run_predict(const std::vector<std::string>& args);
 int run_map(const std::vector<std::string>& args);
 int run_simulate(const std::vector<std::string>& args);
+int run_invert(const std::vector<std::string>& args);
 
 }  // namespace scpkit::cli

@@ -55,6 +55,36 @@ double to_column_units(double canonical, const MeasurementColumn& column, double
 
 std::string csv_number(double v) { return fmt::format("{:.8g}", v); }
 
+ResponseColumn find_response(const Measurement& m, const ModelFile& mf) {
+  ResponseColumn r;
+  for (const auto& c : m.columns()) {
+    if (c.name == mf.response_column) r.column = &c;
+  }
+  if (r.column) {
+    r.signal = Signal{mf.response, r.column->name, r.column->values};
+    if (r.column->quantity == Quantity::kDisplacement && mf.response == "strain") {
+      r.signal = select_response(m, "");  // disp_mm -> strain through length_mm
+    }
+    return r;
+  }
+  try {
+    r.signal = select_response(m, mf.response == "disp_mm" ? "disp_mm" : "");
+  } catch (const InputError& e) {
+    if (e.message().find("no response column") == std::string::npos) throw;
+    return r;
+  }
+  for (const auto& c : m.columns()) {
+    if (c.name == r.signal->column) r.column = &c;
+  }
+  if (r.signal->name != mf.response) {
+    throw InputError(
+        m.source(), m.header_line(), 0,
+        fmt::format("the model's response is {} but the file's is {} (give length_mm metadata?)",
+                    mf.response, r.signal->name));
+  }
+  return r;
+}
+
 void rethrow_at_column(const Measurement& m, const std::string& column,
                        const std::string& message) {
   for (const auto& c : m.columns()) {

@@ -7,6 +7,7 @@
 
 #include "scpkit/error.hpp"
 #include "scpkit/io/measurement.hpp"
+#include "scpkit/io/model_file.hpp"
 #include "scpkit/metrics.hpp"
 
 namespace scpkit::cli {
@@ -52,6 +53,15 @@ double to_column_units(double canonical, const MeasurementColumn& column, double
 
 /// "12.34" style number for CSV output.
 std::string csv_number(double v);
+
+/// The response a model was fitted to, found in another file: the same column when present,
+/// else the file's usual response (InputError when its kind differs from the model's).
+/// Empty when the file holds no response at all.
+struct ResponseColumn {
+  std::optional<Signal> signal;
+  const MeasurementColumn* column = nullptr;
+};
+ResponseColumn find_response(const Measurement& m, const ModelFile& mf);
 
 /// IdentificationError -> InputError located at a column of the data file.
 [[noreturn]] void rethrow_at_column(const Measurement& m, const std::string& column,

@@ -20,6 +20,8 @@ const std::vector<Command>& commands() {
       {"fit", "identify a hysteresis model from a measurement file", scpkit::cli::run_fit},
       {"predict", "run a model on an input sequence; errors when the response is measured",
        scpkit::cli::run_predict},
+      {"invert", "the input sequence that makes a model track a target response",
+       scpkit::cli::run_invert},
       {"map", "map a thread model to another ply count and to an SCP actuator",
        scpkit::cli::run_map},
       {"simulate", "synthetic measurements from the virtual test rig", scpkit::cli::run_simulate},

@@ -75,6 +75,17 @@ for p in 2 4 6; do
   "$bin" simulate "$src/examples/rig/pair-${p}ply.toml" -o "$work/pair-${p}ply.csv" >/dev/null
   assert "example data $p-ply regenerate byte for byte" cmp -s "$work/pair-${p}ply.csv" "$ex/pair-${p}ply.csv"
 done
+check "invert --help" 0 "usage: scpkit invert" -- "$bin" invert --help
+check "invert a measured response" 0 "[0-9]+ unreachable; tracking" -- "$bin" invert "$work/m2.json" "$ex/pair-2ply.csv" -o "$work/inv.csv"
+assert "inverted loads stay in the identified range" awk -F, 'NR > 1 && ($2 < 0.19 || $2 > 2.46) {bad = 1} END {exit bad}' "$work/inv.csv"
+if command -v python3 >/dev/null; then
+  assert "predict(invert(target)) reproduces the inversion's tracking" python3 -c "
+import json,subprocess,sys
+inv = json.loads(subprocess.run(['$bin','invert','$work/m2.json','$ex/pair-2ply.csv','--json'],capture_output=True,text=True).stdout)
+pre = json.loads(subprocess.run(['$bin','predict','$work/m2.json','$work/inv.csv','--json'],capture_output=True,text=True).stdout)
+assert abs(inv['rms_pct_range'] - pre['rms_pct_range']) < 1e-4, (inv, pre)
+assert inv['rms_pct_range'] < 0.2, inv"
+fi
 check "simulate to stdout" 0 "# truth_effects: creep=0" -- "$bin" simulate "$src/examples/rig/pair-2ply.toml"
 
 # Bad input: located errors, exit 3, and outputs neither created nor clobbered.

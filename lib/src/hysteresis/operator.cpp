@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 
 #include "scpkit/error.hpp"
 
@@ -52,29 +53,36 @@ std::string HysteresisOperator::family() const {
   return std::get<PolynomialModel>(model_).coefficients.size() > 2 ? "poly2" : "linear";
 }
 
-double HysteresisOperator::input_min() const {
+namespace {
+std::pair<double, double> own_range(const HysteresisOperator::Variant& v) {
   return std::visit(
-      [](const auto& m) {
+      [](const auto& m) -> std::pair<double, double> {
         using T = std::decay_t<decltype(m)>;
-        if constexpr (std::is_same_v<T, PreisachModel>)
-          return m.grid().lo;
-        else
-          return m.v_min;
+        if constexpr (std::is_same_v<T, PreisachModel>) {
+          return {m.grid().lo, m.grid().hi};
+        } else {
+          return {m.v_min, m.v_max};
+        }
       },
-      model_);
+      v);
+}
+}  // namespace
+
+HysteresisOperator::HysteresisOperator(Variant model) : model_(std::move(model)) {
+  std::tie(input_min_, input_max_) = own_range(model_);
 }
 
-double HysteresisOperator::input_max() const {
-  return std::visit(
-      [](const auto& m) {
-        using T = std::decay_t<decltype(m)>;
-        if constexpr (std::is_same_v<T, PreisachModel>)
-          return m.grid().hi;
-        else
-          return m.v_max;
-      },
-      model_);
+HysteresisOperator::HysteresisOperator(Variant model, double input_min, double input_max)
+    : model_(std::move(model)) {
+  const auto [lo, hi] = own_range(model_);
+  input_min_ = std::max(lo, input_min);
+  input_max_ = std::min(hi, input_max);
+  if (!(input_min_ < input_max_))
+    throw_invalid("operator input range [{}, {}] is empty", input_min, input_max);
 }
+
+double HysteresisOperator::input_min() const { return input_min_; }
+double HysteresisOperator::input_max() const { return input_max_; }
 
 std::vector<double> HysteresisOperator::simulate(std::span<const double> u,
                                                  std::span<const char> starts) const {
@@ -89,7 +97,7 @@ std::vector<double> HysteresisOperator::simulate(std::span<const double> u,
   } else if (const auto* g = std::get_if<GpiModel>(&model_)) {
     GpiState s;
     for (std::size_t t = 0; t < u.size(); ++t) {
-      if (restart(t)) s = GpiState::at_lower_turning_point(*g, u[t]);
+      if (restart(t)) s = GpiState::at_lower_turning_point(*g, g->v_min);
       y[t] = gpi_step(*g, s, u[t]);
     }
   } else {
@@ -104,7 +112,7 @@ std::vector<InverseStep> HysteresisOperator::invert(std::span<const double> targ
   std::vector<InverseStep> out(targets.size());
   auto restart = [&](std::size_t t) { return t == 0 || (!starts.empty() && starts[t]); };
   if (const auto* p = std::get_if<PreisachModel>(&model_)) {
-    PreisachInverter inv(*p);
+    PreisachInverter inv(*p, input_min_, input_max_);
     PreisachState s = PreisachState::negative_saturation(p->grid());
     for (std::size_t t = 0; t < targets.size(); ++t) {
       if (restart(t)) s = PreisachState::negative_saturation(p->grid());
@@ -131,7 +139,7 @@ std::vector<InverseStep> HysteresisOperator::invert(std::span<const double> targ
 
 HysteresisOperator HysteresisOperator::with_output_affine(double gain, double offset) const {
   if (const auto* p = std::get_if<PreisachModel>(&model_)) {
-    return HysteresisOperator(p->with_output_affine(gain, offset));
+    return HysteresisOperator(p->with_output_affine(gain, offset), input_min_, input_max_);
   }
   if (const auto* g = std::get_if<GpiModel>(&model_)) {
     GpiModel m = *g;

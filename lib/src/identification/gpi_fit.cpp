@@ -93,7 +93,7 @@ std::vector<std::vector<double>> gpi_operator_outputs(const GpiModel& shape,
   GpiState s;
   for (std::size_t t = 0; t < n; ++t) {
     if (t == 0 || (!starts.empty() && starts[t]))
-      s = GpiState::at_lower_turning_point(shape, input[t]);
+      s = GpiState::at_lower_turning_point(shape, shape.v_min);
     const double v = std::clamp(input[t], shape.v_min, shape.v_max);
     const double gr = shape.right(v), gl = shape.left(v);
     for (std::size_t j = 0; j < shape.radii.size(); ++j) {

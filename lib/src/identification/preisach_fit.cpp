@@ -410,7 +410,7 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
   }
   if (!converged) summary.warnings.push_back(message);
   summary.message = message;
-  return {std::move(model), std::move(summary)};
+  return {std::move(model), std::move(summary), base.lo, base.hi};
 }
 
 std::string PreisachFitSummary::BriefReport() const {

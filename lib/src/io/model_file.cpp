@@ -15,6 +15,7 @@ namespace {
 json operator_json(const HysteresisOperator& op) {
   json j;
   j["family"] = op.family();
+  j["input_range"] = {op.input_min(), op.input_max()};
   if (const auto* p = std::get_if<PreisachModel>(&op.model())) {
     const PreisachGrid& g = p->grid();
     j["preisach"] = {
@@ -46,9 +47,15 @@ HysteresisOperator operator_from_json(const json& j) {
     const json& p = j.at("preisach");
     PreisachGrid g{p.at("lo").get<double>(), p.at("hi").get<double>(), p.at("levels").get<int>()};
     const auto w = p.at("weights").get<std::vector<double>>();
-    return HysteresisOperator(PreisachModel(
+    PreisachModel model(
         g, Eigen::Map<const Eigen::VectorXd>(w.data(), static_cast<Eigen::Index>(w.size())),
-        p.at("bias").get<double>()));
+        p.at("bias").get<double>());
+    if (j.contains("input_range")) {
+      const auto r = j.at("input_range").get<std::vector<double>>();
+      if (r.size() != 2) throw InvalidArgument("input_range must be [min, max]");
+      return HysteresisOperator(std::move(model), r[0], r[1]);
+    }
+    return HysteresisOperator(std::move(model));
   }
   if (family == "gpi") {
     const json& p = j.at("gpi");

@@ -14,8 +14,8 @@
 //
 // Envelopes are linear, gamma(v) = a v + b with a > 0 (paper 000 Eqs. 16-17); the family is
 // a small value type so another strictly increasing family can replace it.
-// Initial state: each operator on the major loop's lower turning point at v0,
-// w_j = gamma_L(v0) + r_j (the state a falling input leaves); see docs/theory.md.
+// Initial state: each operator on the major loop's lower turning point at v_min,
+// w_j = gamma_L(v_min) + r_j (the state a falling input leaves); see docs/theory.md.
 #include <span>
 #include <vector>
 

@@ -28,7 +28,11 @@ struct PolynomialModel {
 class HysteresisOperator {
  public:
   using Variant = std::variant<PreisachModel, GpiModel, PolynomialModel>;
-  explicit HysteresisOperator(Variant model) : model_(std::move(model)) {}
+  /// The admissible input range is the model's own (GPI, polynomial: [v_min, v_max];
+  /// Preisach: its grid) unless given, as it must be for a Preisach model whose grid extends
+  /// beyond the identified inputs.
+  explicit HysteresisOperator(Variant model);
+  HysteresisOperator(Variant model, double input_min, double input_max);
 
   /// "preisach", "gpi", "linear" or "poly2".
   std::string family() const;
@@ -37,7 +41,8 @@ class HysteresisOperator {
   double input_max() const;
 
   /// Runs the inputs; the memory starts (and restarts where `starts` is set) in the family's
-  /// initial state: Preisach negative saturation, GPI lower turning point at that input.
+  /// initial state at the lowest admissible input: Preisach negative saturation, GPI the
+  /// lower turning point of the major loop at v_min.
   std::vector<double> simulate(std::span<const double> input,
                                std::span<const char> starts = {}) const;
 
@@ -51,6 +56,7 @@ class HysteresisOperator {
 
  private:
   Variant model_;
+  double input_min_, input_max_;
 };
 
 }  // namespace scpkit

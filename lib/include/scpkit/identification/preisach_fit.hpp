@@ -76,6 +76,8 @@ struct PreisachFitSummary {
 struct PreisachFit {
   PreisachModel model;
   PreisachFitSummary summary;
+  double input_min = 0.0;  ///< the identified input range (the model's grid may extend beyond)
+  double input_max = 0.0;
 };
 
 /// Identifies a Preisach model. `blocks` (optional, one id per sample) names the segments used
