@@ -2,11 +2,13 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "scpkit/identification/augmented_fit.hpp"
 #include "scpkit/identification/gpi_fit.hpp"
 #include "scpkit/identification/polynomial_fit.hpp"
 #include "scpkit/identification/preisach_fit.hpp"
@@ -93,7 +95,22 @@ int run_fit(const std::vector<std::string>& args) {
   }
   const std::string data_path = vm["DATA"].as<std::string>();
   const Measurement m = Measurement::read(data_path);
-  const Signal in = select_input(m, vm["input"].as<std::string>());
+  // Voltage (power, temperature) tests at several constant loads: the augmented model.
+  const MeasurementColumn* load_col = m.find(Quantity::kLoad);
+  auto varies = [](const MeasurementColumn* c) {
+    if (!c) return false;
+    const auto [lo, hi] = std::minmax_element(c->values.begin(), c->values.end());
+    return *hi > *lo;
+  };
+  const MeasurementColumn* drive = nullptr;
+  for (Quantity q : {Quantity::kVoltage, Quantity::kPower, Quantity::kTemperature}) {
+    if (!drive && varies(m.find(q))) drive = m.find(q);
+  }
+  const std::string wanted_input = vm["input"].as<std::string>();
+  const bool augmented =
+      drive && varies(load_col) && wanted_input != "load" && wanted_input != load_col->name;
+  const Signal in =
+      augmented ? select_input(m, drive->name) : select_input(m, vm["input"].as<std::string>());
   const bool paired = m.find(Quantity::kThreadStrain) && m.find(Quantity::kScpStrain);
   std::string response_choice = vm["response"].as<std::string>();
   if (response_choice.empty() && paired) response_choice = "thread";
@@ -134,8 +151,40 @@ int run_fit(const std::vector<std::string>& args) {
   double cv_rms = -1.0;
   std::string report;
   nlohmann::json details = nlohmann::json::object();
+  std::optional<AugmentedModel> aug;
   try {
-    if (model_kind == "preisach") {
+    if (augmented) {
+      AugmentedFitOptions ao;
+      ao.family = model_kind;
+      ao.preisach = fo;
+      ao.gpi.operators = vm["operators"].as<int>();
+      ao.gpi.sign = fo.sign;
+      if (vm.count("max-radius")) ao.gpi.max_radius = vm["max-radius"].as<double>() * in_factor;
+      const AugmentedFit af = fit_augmented(load_col->values, in.values, out.values, blocks, ao);
+      aug = af.model;
+      op.emplace(af.model.h);
+      train = af.train;
+      cv_rms = -1.0;
+      std::string segs;
+      for (const auto& sg : af.segments) {
+        segs +=
+            fmt::format("\n    load {:7.4g} N: offset {:+.4f}, range {:+.4f}", sg.load,
+                        display_scale(out.name) * sg.offset, display_scale(out.name) * sg.range);
+      }
+      report = fmt::format(
+          "augmented {} model over {} constant-load segments (y = f2(F) H[{}] + f1(F)):{}\n"
+          "  f1(F) = {:.5g} {:+.5g} F {:+.5g} F^2,  f2(F) = {:.5g} {:+.5g} F {:+.5g} F^2  ({}, F "
+          "in N)\n"
+          "  H: {}\n  identification: E_max {:.3f} %, E_RMS {:.3f} % of the response range",
+          model_kind, af.segments.size(), in.name, segs, af.model.f1.c0, af.model.f1.c1,
+          af.model.f1.c2, af.model.f2.c0, af.model.f2.c1, af.model.f2.c2,
+          out.name == "strain" ? "strain" : "mm", af.report, train.max_pct_range,
+          train.rms_pct_range);
+      details["segments"] = af.segments.size();
+      details["f1"] = {af.model.f1.c0, af.model.f1.c1, af.model.f1.c2};
+      details["f2"] = {af.model.f2.c0, af.model.f2.c1, af.model.f2.c2};
+      details["load_range_N"] = {af.model.load_min, af.model.load_max};
+    } else if (model_kind == "preisach") {
       const PreisachFit fit = fit_preisach(in.values, out.values, blocks, fo);
       op.emplace(fit.model, fit.input_min, fit.input_max);
       train = fit.summary.train;
@@ -194,6 +243,7 @@ int run_fit(const std::vector<std::string>& args) {
   mf.response = out.name;
   mf.response_column = out.column;
   mf.op = *op;
+  mf.augmented = aug;
   mf.specimen.specimen = m.meta("specimen").value_or("");
   mf.specimen.material = m.meta("material").value_or("");
   mf.specimen.plies = m.meta_positive_int("plies").value_or(0);
@@ -220,7 +270,8 @@ int run_fit(const std::vector<std::string>& args) {
   if (vm.count("json")) {
     nlohmann::json j = metrics_json(mf.fit_metrics);
     j["model_file"] = model_path;
-    j["model"] = model_kind;
+    j["model"] = augmented ? "augmented" : model_kind;
+    j["operator"] = model_kind;
     j["input"] = in.name;
     j["response"] = out.name;
     j["response_unit"] = unit;

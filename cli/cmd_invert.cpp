@@ -42,7 +42,11 @@ int run_invert(const std::vector<std::string>& args) {
   const Signal& target = *found.signal;
   const MeasurementColumn* target_col = found.column;
   const double length_mm = m.meta_number("length_mm").value_or(mf.specimen.length_mm);
-  const std::vector<InverseStep> steps = mf.op.invert(target.values);
+  const ModelInputs mi = model_inputs(m, mf);
+  for (const auto& w : mi.warnings) std::cerr << "scpkit invert: warning: " << w << "\n";
+  const std::vector<InverseStep> steps =
+      mf.augmented ? mf.augmented->invert(mi.load_N, target.values, mi.starts)
+                   : mf.op.invert(target.values);
 
   std::vector<double> achieved(steps.size());
   int unreachable = 0;
@@ -58,11 +62,14 @@ int run_invert(const std::vector<std::string>& args) {
   const MeasurementColumn* time = m.find(Quantity::kTime);
   if (time) csv << time->name << ",";
   if (seg) csv << "segment,";
+  const MeasurementColumn* load = mf.augmented ? m.find(Quantity::kLoad) : nullptr;
+  if (load) csv << load->name << ",";
   csv << mf.input << "," << target.column << ",predicted_" << target.column << ",error_"
       << target.column << ",reached\n";
   for (std::size_t t = 0; t < steps.size(); ++t) {
     if (time) csv << m.cell(t, time->position) << ",";
     if (seg) csv << m.cell(t, seg->position) << ",";
+    if (load) csv << m.cell(t, load->position) << ",";
     const double tgt = to_column_units(target.values[t], *target_col, length_mm, mf.response);
     const double got = to_column_units(steps[t].output, *target_col, length_mm, mf.response);
     csv << csv_number(steps[t].input) << "," << m.cell(t, target_col->position) << ","
@@ -73,7 +80,8 @@ int run_invert(const std::vector<std::string>& args) {
 
   if (vm.count("json")) {
     nlohmann::json j = metrics_json(err);
-    j["model"] = mf.op.family();
+    j["model"] = mf.augmented ? "augmented" : mf.op.family();
+    j["warnings"] = mi.warnings;
     j["rows"] = steps.size();
     j["unreachable"] = unreachable;
     j["input"] = mf.input;

@@ -32,8 +32,12 @@ int run_predict(const std::vector<std::string>& args) {
   if (!parse_command_line(args, kUsage, kAbout, opt, {"MODEL", "DATA"}, vm)) return kOk;
   const ModelFile mf = load_model(vm["MODEL"].as<std::string>());
   const Measurement m = Measurement::read(vm["DATA"].as<std::string>());
-  const Signal in = select_input(m, mf.input);
-  const std::vector<double> y = mf.op.simulate(in.values);
+  const ModelInputs mi = model_inputs(m, mf);
+  const Signal& in = mi.input;
+  const std::vector<double> y = mf.augmented
+                                    ? mf.augmented->simulate(mi.load_N, in.values, mi.starts)
+                                    : mf.op.simulate(in.values);
+  for (const auto& w : mi.warnings) std::cerr << "scpkit predict: warning: " << w << "\n";
 
   const ResponseColumn found = find_response(m, mf);
   const std::optional<Signal>& measured = found.signal;
@@ -69,7 +73,8 @@ int run_predict(const std::vector<std::string>& args) {
   if (vm.count("json")) {
     nlohmann::json j = err ? metrics_json(*err) : nlohmann::json::object();
     j["rows"] = m.rows();
-    j["model"] = mf.op.family();
+    j["model"] = mf.augmented ? "augmented" : mf.op.family();
+    j["warnings"] = mi.warnings;
     j["input"] = in.name;
     j["response"] = mf.response;
     j["response_unit"] = display_unit(mf.response);

@@ -85,6 +85,34 @@ ResponseColumn find_response(const Measurement& m, const ModelFile& mf) {
   return r;
 }
 
+ModelInputs model_inputs(const Measurement& m, const ModelFile& mf) {
+  ModelInputs r{select_input(m, mf.input), {}, {}, {}};
+  if (!mf.augmented) return r;
+  const MeasurementColumn* load = m.find(Quantity::kLoad);
+  if (!load) {
+    throw InputError(m.source(), m.header_line(), 0,
+                     "the model is augmented (several loads): the file needs a load column "
+                     "(load_g, load_mN or load_N)");
+  }
+  r.load_N = load->values;
+  std::vector<int> ids;
+  if (const MeasurementColumn* seg = m.find(Quantity::kSegment)) {
+    for (double v : seg->values) ids.push_back(static_cast<int>(v));
+  }
+  r.starts.assign(m.rows(), 0);
+  for (std::size_t t = 0; t < m.rows(); ++t) {
+    r.starts[t] =
+        t == 0 || (!ids.empty() && ids[t] != ids[t - 1]) || r.load_N[t] != r.load_N[t - 1];
+    if (mf.augmented->outside_load_range(r.load_N[t]) && (t == 0 || r.starts[t])) {
+      r.warnings.push_back(fmt::format(
+          "line {}: load {:.4g} N is outside the identified range [{:.4g}, {:.4g}] N "
+          "(extrapolated)",
+          m.line_of_row(t), r.load_N[t], mf.augmented->load_min, mf.augmented->load_max));
+    }
+  }
+  return r;
+}
+
 void rethrow_at_column(const Measurement& m, const std::string& column,
                        const std::string& message) {
   for (const auto& c : m.columns()) {

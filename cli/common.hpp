@@ -63,6 +63,17 @@ struct ResponseColumn {
 };
 ResponseColumn find_response(const Measurement& m, const ModelFile& mf);
 
+/// How a model runs on a file: the inputs, and for an augmented model the loads (N) and
+/// the segment starts (new segment id or load change). Warnings for loads outside the
+/// identified range.
+struct ModelInputs {
+  Signal input;
+  std::vector<double> load_N;  ///< empty unless augmented
+  std::vector<char> starts;    ///< empty unless augmented
+  std::vector<std::string> warnings;
+};
+ModelInputs model_inputs(const Measurement& m, const ModelFile& mf);
+
 /// IdentificationError -> InputError located at a column of the data file.
 [[noreturn]] void rethrow_at_column(const Measurement& m, const std::string& column,
                                     const std::string& message);

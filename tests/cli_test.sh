@@ -71,6 +71,14 @@ assert "map csv has the band" grep -q "scp_band_lo_strain_pct" "$work/map4.csv"
 check "map without data" 0 "predicted 6-ply SCP major loop" -- "$bin" map "$work/m2.json" --plies 6
 check "map needs --plies" 2 "--plies Q is required" -- "$bin" map "$work/m2.json"
 check "map rejects an impossible coil" 2 "spring index" -- "$bin" map "$work/m2.json" --plies 4 --coil-d 0.3 --coil-D 0.2 --coil-n 100
+for mdl in gpi preisach linear poly2; do
+  check "augmented $mdl fit on voltage tests" 0 "augmented $mdl model over 8 constant-load segments" -- "$bin" fit "$ex/voltage-8loads.csv" --model $mdl -o "$work/v-$mdl.json"
+done
+printf 'test = "voltage"\nlength_mm = 70\n[voltage]\nloads_g = [120, 130]\n' >"$work/heavy.toml"
+"$bin" simulate "$work/heavy.toml" -o "$work/v-heavy.csv" >/dev/null
+check "augmented predict warns outside the load range" 0 "outside the identified range" -- "$bin" predict "$work/v-gpi.json" "$work/v-heavy.csv" -o "$work/v-heavy-pred.csv"
+check "augmented invert" 0 "[0-9]+ unreachable; tracking" -- "$bin" invert "$work/v-gpi.json" "$ex/voltage-8loads.csv" -o "$work/v-inv.csv"
+assert "augmented invert keeps the load column" grep -q "^time_s,segment,load_g,voltage_V,disp_mm," "$work/v-inv.csv"
 for p in 2 4 6; do
   "$bin" simulate "$src/examples/rig/pair-${p}ply.toml" -o "$work/pair-${p}ply.csv" >/dev/null
   assert "example data $p-ply regenerate byte for byte" cmp -s "$work/pair-${p}ply.csv" "$ex/pair-${p}ply.csv"

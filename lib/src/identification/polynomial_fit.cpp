@@ -13,7 +13,7 @@ PolynomialModel fit_polynomial(std::span<const double> x, std::span<const double
   if (degree < 1 || degree > 2) throw_invalid("polynomial degree must be 1 or 2, got {}", degree);
   if (x.size() != y.size()) throw_invalid("polynomial fit: {} x vs {} y", x.size(), y.size());
   const auto n = static_cast<Eigen::Index>(x.size());
-  if (n < degree + 2) {
+  if (n < degree + 1) {
     throw IdentificationError(
         fmt::format("{} samples are too few for a degree-{} polynomial", n, degree));
   }

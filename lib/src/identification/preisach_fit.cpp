@@ -54,14 +54,21 @@ Eigen::MatrixXd smoothness_penalty(const PreisachGrid& grid) {
 
 Design make_design(const PreisachGrid& grid, int sign, std::span<const double> input,
                    std::span<const double> output, const std::vector<int>& block_of, int nblocks,
-                   bool with_rank) {
+                   bool with_rank, bool restart) {
   Design d;
   d.grid = grid;
   const auto n = static_cast<Eigen::Index>(input.size());
   const int p = grid.cells();
   PreisachState state = PreisachState::negative_saturation(grid);
   d.A.resize(n, p + 1);
-  d.A.leftCols(p) = regressor_matrix(grid, state, input) * static_cast<double>(sign);
+  Eigen::VectorXd row(p);
+  for (Eigen::Index t = 0; t < n; ++t) {
+    if (restart && t > 0 && block_of[t] != block_of[t - 1])
+      state = PreisachState::negative_saturation(grid);
+    state.apply(input[t]);
+    signed_area_fractions(grid, state, row);
+    d.A.row(t).head(p) = row.transpose() * static_cast<double>(sign);
+  }
   d.A.col(p).setOnes();
   for (int k = 0; k < p; ++k) {
     if (d.A.col(k).maxCoeff() - d.A.col(k).minCoeff() < 1e-9) ++d.unexcited;
@@ -334,11 +341,12 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
   summary.heldout_blocks = static_cast<int>(std::count(eligible.begin(), eligible.end(), 1));
 
   const int S = options.grid_shifts;
+  const bool restart = options.restart_at_blocks && !blocks.empty();
   auto designs_for = [&](int L, bool with_rank) {
     std::vector<Design> shifts;
     for (int k = 0; k < S; ++k) {
       shifts.push_back(make_design(shifted_grid(base, L, k, S), sign, input, output, block_of,
-                                   nblocks, with_rank && k == 0));
+                                   nblocks, with_rank && k == 0, restart));
     }
     return shifts;
   };

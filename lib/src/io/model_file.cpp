@@ -91,11 +91,20 @@ void save_model(const std::filesystem::path& path, const ModelFile& m) {
   j["format"] = "scpkit-model";
   j["version"] = 1;
   j["scpkit"] = kVersion;
-  j["model"] = m.op.family();
+  j["model"] = m.op.family();  // "augmented" below when load maps are present
   j["input"] = m.input;
   j["response"] = m.response;
   j["response_column"] = m.response_column;
   j["operator"] = operator_json(m.op);
+  if (m.augmented) {
+    const AugmentedModel& a = *m.augmented;
+    j["model"] = "augmented";
+    j["augmented"] = {
+        {"f1", {a.f1.c0, a.f1.c1, a.f1.c2}},
+        {"f2", {a.f2.c0, a.f2.c1, a.f2.c2}},
+        {"load_range_N", {a.load_min, a.load_max}},
+        {"form", "y = f2(F) * H[input] + f1(F), f = c0 + c1 F + c2 F^2, F in N, H = operator"}};
+  }
   json s;
   s["specimen"] = m.specimen.specimen;
   s["material"] = m.specimen.material;
@@ -152,6 +161,22 @@ ModelFile load_model(const std::filesystem::path& path) {
     if (m.response != "strain" && m.response != "disp_mm")
       throw InputError(name, 0, 0, "unknown response '" + m.response + "'");
     m.op = operator_from_json(j.at("operator"));
+    if (j.contains("augmented")) {
+      const json& a = j.at("augmented");
+      const auto f1 = a.at("f1").get<std::vector<double>>(),
+                 f2 = a.at("f2").get<std::vector<double>>();
+      const auto range = a.at("load_range_N").get<std::vector<double>>();
+      if (f1.size() != 3 || f2.size() != 3 || range.size() != 2)
+        throw InvalidArgument("augmented maps need 3 coefficients and a [min, max] load range");
+      AugmentedModel am;
+      am.f1 = {f1[0], f1[1], f1[2]};
+      am.f2 = {f2[0], f2[1], f2[2]};
+      am.load_min = range[0];
+      am.load_max = range[1];
+      am.h = m.op;
+      am.validate();
+      m.augmented = am;
+    }
     const json& s = j.at("specimen");
     m.specimen.specimen = s.value("specimen", "");
     m.specimen.material = s.value("material", "");

@@ -9,6 +9,7 @@
 
 #include "../io/toml_reader.hpp"
 #include "scpkit/error.hpp"
+#include "sensor.hpp"
 
 namespace scpkit {
 namespace {
@@ -19,6 +20,23 @@ constexpr double kTruthMaxPerPlyN = 2.0;  // the truth's plane covers 0..2 N per
 }  // namespace
 
 void RigSpec::validate() const {
+  if (test != "load" && test != "voltage")
+    throw_invalid("test must be load or voltage, got '{}'", test);
+  if (test == "voltage") {
+    const VoltageProtocol& v = voltage;
+    if (v.loads_g.empty()) throw_invalid("voltage tests need at least one load");
+    for (double g : v.loads_g) {
+      if (!(g > 0.0) || !std::isfinite(g)) throw_invalid("voltage-test loads must be > 0 g");
+    }
+    if (!(v.v_max > 0.0)) throw_invalid("v_max must be > 0");
+    if (v.cycles < 1 || v.steps_per_half < 1)
+      throw_invalid("voltage protocol counts must be positive");
+    if (!(v.dwell_s > 0.0)) throw_invalid("voltage dwell_s must be > 0");
+    if (v.truth != "gpi" && v.truth != "preisach")
+      throw_invalid("voltage truth must be gpi or preisach, got '{}'", v.truth);
+    if (effects.minor_loop_noncongruence > 0.0)
+      throw_invalid("minor_loop_noncongruence applies to load tests only");
+  }
   if (specimen != "thread" && specimen != "scp" && specimen != "pair") {
     throw_invalid("specimen must be thread, scp or pair, got '{}'", specimen);
   }
@@ -62,11 +80,32 @@ RigSpec load_rig_spec(const std::filesystem::path& path) {
   using detail::TomlReader;
   const toml::table root = TomlReader::parse(path);
   const TomlReader r(path.string());
-  r.only_keys(root, {"seed", "specimen", "plies", "material", "length_mm", "scp_offset_pct", "coil",
-                     "protocol", "sensor", "effects", "load_sequence_g"});
+  r.only_keys(root, {"seed", "test", "specimen", "plies", "material", "length_mm", "scp_offset_pct",
+                     "coil", "protocol", "voltage", "sensor", "effects", "load_sequence_g"});
   RigSpec s;
   s.seed = static_cast<std::uint64_t>(r.integer(root, "seed", 1, 0, 1LL << 62));
+  s.test = r.text(root, "test", s.test);
   s.specimen = r.text(root, "specimen", s.specimen);
+  if (const toml::table* v = r.table(root, "voltage")) {
+    r.only_keys(*v, {"loads_g", "v_max", "cycles", "steps_per_half", "dwell_s", "truth"});
+    VoltageProtocol& q = s.voltage;
+    if (const toml::node* n = v->get("loads_g")) {
+      const toml::array* a = n->as_array();
+      if (!a) r.fail(n, "'loads_g' must be an array of numbers");
+      q.loads_g.clear();
+      for (const toml::node& x : *a) {
+        const auto g = x.value<double>();
+        if (!g) r.fail(&x, "'loads_g' must hold numbers");
+        q.loads_g.push_back(*g);
+      }
+    }
+    q.v_max = r.positive(*v, "v_max", q.v_max, false);
+    q.cycles = static_cast<int>(r.integer(*v, "cycles", q.cycles, 1, 1000));
+    q.steps_per_half =
+        static_cast<int>(r.integer(*v, "steps_per_half", q.steps_per_half, 1, 10000));
+    q.dwell_s = r.positive(*v, "dwell_s", q.dwell_s, false);
+    q.truth = r.text(*v, "truth", q.truth);
+  }
   s.plies = static_cast<int>(r.integer(root, "plies", s.plies, 1, 100));
   s.material = r.text(root, "material", s.material);
   s.length_mm = r.positive(root, "length_mm", s.length_mm, false);
@@ -193,8 +232,11 @@ std::vector<double> rig_load_protocol(const RigSpec& spec) {
   return loads;
 }
 
+RigRun run_voltage_rig(const RigSpec& spec);  // voltage_rig.cpp
+
 RigRun run_rig(const RigSpec& spec, const Material& material) {
   spec.validate();
+  if (spec.test == "voltage") return run_voltage_rig(spec);
   CoilGeometry coil;
   if (spec.coil) {
     coil = *spec.coil;
@@ -215,8 +257,6 @@ RigRun run_rig(const RigSpec& spec, const Material& material) {
   const std::vector<double> loads_g = rig_load_protocol(spec);
   const std::size_t n = loads_g.size();
   std::mt19937_64 rng(spec.seed);
-  std::normal_distribution<double> normal(0.0, 1.0);
-  std::uniform_real_distribution<double> U(0.0, 1.0);
 
   // Nominal ranges for scaling the effects.
   const auto [lmin, lmax] = std::minmax_element(loads_g.begin(), loads_g.end());
@@ -255,24 +295,12 @@ RigRun run_rig(const RigSpec& spec, const Material& material) {
     y += e.lonely_stroke * y_range * (running_max - f_lo) / f_range;
     material_strain[k] = y;
   }
-  const double t_end = t;
 
   // One measured channel: strain -> drift, outliers, sensor noise and quantisation.
   auto measure = [&](double g, double offset) {
-    std::vector<double> pct(n);
-    const double range = std::abs(g) * y_range;
-    for (std::size_t k = 0; k < n; ++k) {
-      double strain = g * material_strain[k] + offset;
-      strain += e.drift * range * time_s[k] / t_end;
-      if (e.outliers > 0.0 && U(rng) < 0.01) {
-        strain += (U(rng) < 0.5 ? -1.0 : 1.0) * e.outliers * range * (1.0 + U(rng));
-      }
-      double disp = strain * spec.length_mm + spec.noise_mm * normal(rng);
-      if (spec.resolution_mm > 0.0)
-        disp = std::round(disp / spec.resolution_mm) * spec.resolution_mm;
-      pct[k] = 100.0 * disp / spec.length_mm;
-    }
-    return pct;
+    std::vector<double> strain(n);
+    for (std::size_t k = 0; k < n; ++k) strain[k] = g * material_strain[k] + offset;
+    return detail::measure_channel(strain, time_s, std::abs(g) * y_range, spec, rng);
   };
 
   RigRun run;

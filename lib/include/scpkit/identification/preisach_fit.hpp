@@ -38,6 +38,9 @@ struct PreisachFitOptions {
   std::optional<double> lo;  ///< lowest threshold; default: smallest input
   std::optional<double> hi;  ///< highest threshold; default: largest input
   int folds = 5;             ///< blocks for cross-validation when no block ids are given
+  /// Restart the memory (negative saturation) at the start of every given block: segments
+  /// that are separate tests, e.g. the constant-load segments of an augmented model.
+  bool restart_at_blocks = false;
   NnlsOptions nnls;
 
   /// False (with the reason) for impossible settings.

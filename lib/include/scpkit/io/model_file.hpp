@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 
+#include "scpkit/hysteresis/augmented.hpp"
 #include "scpkit/hysteresis/operator.hpp"
 #include "scpkit/hysteresis/preisach.hpp"
 #include "scpkit/identification/preisach_fit.hpp"
@@ -31,6 +32,8 @@ struct ModelFile {
       PreisachModel{PreisachGrid{}, Eigen::VectorXd::Zero(PreisachGrid{}.cells()), 0.0}};
   /// The Preisach model, or nullptr for another family.
   const PreisachModel* preisach() const { return std::get_if<PreisachModel>(&op.model()); }
+  /// Voltage tests under several loads: y = f2(F) op[v] + f1(F) (its h is op).
+  std::optional<AugmentedModel> augmented;
   SpecimenInfo specimen;
   std::optional<GainFit> scp_gain;  ///< SCP strain vs thread strain, from paired data
   ErrorMetrics fit_metrics;

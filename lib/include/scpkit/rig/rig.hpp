@@ -16,6 +16,8 @@
 //   lonely_stroke             running-maximum offset, fraction of the range (training)
 //   outliers                  spike size in strain ranges, on ~1 % of readings
 //   minor_loop_noncongruence  a of the moving Preisach model Gamma[u + a * range_u * y / range_y]
+// Voltage tests (test = "voltage"): y = f2(F) H[v] + f1(F) per constant-load segment, each from
+// H's initial state; lonely_stroke there is re-armed at every load change (paper 001).
 #include <cstdint>
 #include <filesystem>
 #include <map>
@@ -23,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "scpkit/hysteresis/augmented.hpp"
 #include "scpkit/hysteresis/preisach.hpp"
 #include "scpkit/mechanics/coil.hpp"
 #include "scpkit/mechanics/material.hpp"
@@ -39,6 +42,18 @@ struct LoadProtocol {
   double dwell_s = 180.0;        ///< hold before each reading (paper 002: 3 min)
 };
 
+/// Voltage tests at several constant loads (paper 000: 8 loads 294-980 mN, damped voltage
+/// oscillation 0-5.1 V, 60 s dwell; paper 001: load switched 400 g -> 200 g).
+struct VoltageProtocol {
+  std::vector<double> loads_g = {30, 40, 50, 60, 70, 80, 90, 100};  ///< 294 ... 980 mN
+  double v_max = 5.1;
+  int cycles = 2;          ///< damped oscillation cycles per load
+  int steps_per_half = 9;  ///< readings per half cycle
+  double dwell_s = 60.0;
+  std::string truth =
+      "gpi";  ///< H of the truth: gpi (paper 000's identified envelopes) or preisach
+};
+
 struct RigEffects {
   double creep = 0.0;
   double creep_tau_s = 60.0;
@@ -50,6 +65,8 @@ struct RigEffects {
 
 struct RigSpec {
   std::uint64_t seed = 1;
+  std::string test = "load";  ///< load (load -> strain) or voltage (voltage -> strain under loads)
+  VoltageProtocol voltage;    ///< used when test = "voltage"
   std::string specimen = "pair";  ///< thread, scp, or pair (both strains in one file)
   int plies = 2;
   std::string material = "nylon-110-34-dtex";
@@ -84,5 +101,14 @@ RigRun run_rig(const RigSpec& spec, const Material& material);
 
 /// The load protocol alone, in grams (damped oscillation then minor loops).
 std::vector<double> rig_load_protocol(const RigSpec& spec);
+
+/// The voltage side's ground truth: H normalised to H[0] = 0, H[v_max] = -1 on the first
+/// rise, and the offset and range maps of paper 000 Eqs. 14-15 read as strain of a 70 mm
+/// actuator: f1(F) = -(D(F) - D(294 mN)) / 70 mm, f2(F) = -P(F) / 70 mm, F in N.
+struct VoltageTruth {
+  HysteresisOperator h;
+  Quadratic f1, f2;
+};
+VoltageTruth rig_voltage_truth(const RigSpec& spec);
 
 }  // namespace scpkit
