@@ -10,6 +10,7 @@
 #include "common.hpp"
 #include "scpkit/identification/augmented_fit.hpp"
 #include "scpkit/identification/gpi_fit.hpp"
+#include "scpkit/identification/lonely_fit.hpp"
 #include "scpkit/identification/polynomial_fit.hpp"
 #include "scpkit/identification/preisach_fit.hpp"
 #include "scpkit/io/model_file.hpp"
@@ -56,7 +57,7 @@ int run_fit(const std::vector<std::string>& args) {
   po::options_description opt("options");
   opt.add_options()("help,h", "show this help")(
       "model", po::value<std::string>()->default_value("preisach"),
-      "model: preisach, gpi, linear, poly2 (lonely: not in this version)")(
+      "model: preisach, gpi, lonely (Preisach + lonely stroke), linear, poly2")(
       "operators", po::value<int>()->default_value(11), "GPI: number of play operators N + 1")(
       "max-radius", po::value<double>(),
       "GPI: largest play radius, in the input column's units (default: a quarter of the input "
@@ -84,12 +85,8 @@ int run_fit(const std::vector<std::string>& args) {
   if (!parse_command_line(args, kUsage, kAbout, opt, {"DATA"}, vm)) return kOk;
 
   const std::string model_kind = vm["model"].as<std::string>();
-  if (model_kind == "lonely") {
-    throw UsageError(
-        "model 'lonely' is not available in this version of scpkit (preisach, gpi, linear, poly2)");
-  }
   if (model_kind != "preisach" && model_kind != "gpi" && model_kind != "linear" &&
-      model_kind != "poly2") {
+      model_kind != "poly2" && model_kind != "lonely") {
     throw UsageError(
         fmt::format("unknown model '{}' (preisach, gpi, linear, poly2, lonely)", model_kind));
   }
@@ -159,6 +156,8 @@ int run_fit(const std::vector<std::string>& args) {
       ao.preisach = fo;
       ao.gpi.operators = vm["operators"].as<int>();
       ao.gpi.sign = fo.sign;
+      ao.lonely.sign = fo.sign;
+      if (fo.levels > 0) ao.lonely.levels = fo.levels;
       if (vm.count("max-radius")) ao.gpi.max_radius = vm["max-radius"].as<double>() * in_factor;
       const AugmentedFit af = fit_augmented(load_col->values, in.values, out.values, blocks, ao);
       aug = af.model;
@@ -205,6 +204,18 @@ int run_fit(const std::vector<std::string>& args) {
                       {"rms_pct_range", p.rms_pct_range}});
       }
       details["cross_validation"] = cv;
+    } else if (model_kind == "lonely") {
+      LonelyFitOptions lo;
+      lo.sign = fo.sign;
+      if (fo.levels > 0) lo.levels = fo.levels;
+      lo.lo = fo.lo;
+      lo.hi = fo.hi;
+      const LonelyFit fit = fit_lonely(in.values, out.values, {}, lo);
+      op.emplace(fit.model, fit.input_min, fit.input_max);
+      train = fit.train;
+      report = fit.report;
+      details["levels"] = lo.levels;
+      details["running_max_weights"] = fit.model.column_weights;
     } else if (model_kind == "gpi") {
       GpiFitOptions go;
       go.operators = vm["operators"].as<int>();

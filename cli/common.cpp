@@ -101,8 +101,12 @@ ModelInputs model_inputs(const Measurement& m, const ModelFile& mf) {
   }
   r.starts.assign(m.rows(), 0);
   for (std::size_t t = 0; t < m.rows(); ++t) {
-    r.starts[t] =
+    const bool start =
         t == 0 || (!ids.empty() && ids[t] != ids[t - 1]) || r.load_N[t] != r.load_N[t - 1];
+    // A restart after a load increase re-arms the lonely stroke with the opposite sign.
+    r.starts[t] =
+        !start ? kContinue
+               : (t > 0 && r.load_N[t] > r.load_N[t - 1] ? kRestartAfterLoadIncrease : kRestart);
     if (mf.augmented->outside_load_range(r.load_N[t]) && (t == 0 || r.starts[t])) {
       r.warnings.push_back(fmt::format(
           "line {}: load {:.4g} N is outside the identified range [{:.4g}, {:.4g}] N "

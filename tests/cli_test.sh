@@ -44,9 +44,8 @@ for c in fit predict map simulate; do
 done
 check "unknown option" 2 "unrecognised option|unrecognized option" -- "$bin" fit "$ex/pair-2ply.csv" --bogus
 check "missing positional" 2 "missing DATA" -- "$bin" fit
-check "model not in this version" 2 "not available" -- "$bin" fit "$ex/pair-2ply.csv" --model lonely
 check "unknown model" 2 "unknown model 'spline'" -- "$bin" fit "$ex/pair-2ply.csv" --model spline
-for mdl in gpi linear poly2; do
+for mdl in gpi lonely linear poly2; do
   check "fit --model $mdl" 0 "identification: E_max" -- "$bin" fit "$ex/pair-2ply.csv" --model $mdl -o "$work/$mdl.json"
   check "predict with a $mdl model" 0 "\"model\": \"$mdl\"" -- "$bin" predict "$work/$mdl.json" "$ex/pair-2ply.csv" --json
 done
@@ -71,7 +70,7 @@ assert "map csv has the band" grep -q "scp_band_lo_strain_pct" "$work/map4.csv"
 check "map without data" 0 "predicted 6-ply SCP major loop" -- "$bin" map "$work/m2.json" --plies 6
 check "map needs --plies" 2 "--plies Q is required" -- "$bin" map "$work/m2.json"
 check "map rejects an impossible coil" 2 "spring index" -- "$bin" map "$work/m2.json" --plies 4 --coil-d 0.3 --coil-D 0.2 --coil-n 100
-for mdl in gpi preisach linear poly2; do
+for mdl in gpi preisach lonely linear poly2; do
   check "augmented $mdl fit on voltage tests" 0 "augmented $mdl model over 8 constant-load segments" -- "$bin" fit "$ex/voltage-8loads.csv" --model $mdl -o "$work/v-$mdl.json"
 done
 printf 'test = "voltage"\nlength_mm = 70\n[voltage]\nloads_g = [120, 130]\n' >"$work/heavy.toml"

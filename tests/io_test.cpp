@@ -139,13 +139,17 @@ TEST(ModelFile, RoundTripsExactlyAndLocatesJsonErrors) {
   g.v_max = 5.1;
   for (const HysteresisOperator& op :
        {HysteresisOperator(g), HysteresisOperator(PolynomialModel{{0.008, -0.173}, 0.0, 5.1}),
-        HysteresisOperator(PolynomialModel{{1.0, 2.0, -0.1}, 0.5, 4.0})}) {
+        HysteresisOperator(PolynomialModel{{1.0, 2.0, -0.1}, 0.5, 4.0}),
+        HysteresisOperator(LonelyModel{testing::random_model(rng, PreisachGrid{0.0, 5.0, 4}),
+                                       {-0.1, -0.2, 0.0, -0.05}},
+                           0.5, 4.5)}) {
     mf.op = op;
     save_model(d / "m.json", mf);
     const ModelFile b2 = load_model(d / "m.json");
     EXPECT_EQ(b2.op.family(), op.family());
     const std::vector<double> u = {0.5, 3.0, 1.0, 4.0, 2.0};
     EXPECT_EQ(b2.op.simulate(u), op.simulate(u));
+    EXPECT_EQ(b2.op.input_min(), op.input_min());
   }
   std::ofstream(d / "bad.json") << "{\n  \"format\": \"scpkit-model\",\n  oops\n}\n";
   EXPECT_THROW_MSG(load_model(d / "bad.json"), InputError, "bad.json:3:");

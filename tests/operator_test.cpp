@@ -27,7 +27,9 @@ std::vector<HysteresisOperator> families(std::mt19937& rng) {
   g.v_max = 5.1;
   return {HysteresisOperator(testing::random_model(rng, PreisachGrid{0.0, 5.1, 10})),
           HysteresisOperator(g), HysteresisOperator(PolynomialModel{{0.008, -0.173}, 0.0, 5.1}),
-          HysteresisOperator(PolynomialModel{{0.1, 0.5, -0.03}, 0.0, 5.1})};
+          HysteresisOperator(PolynomialModel{{0.1, 0.5, -0.03}, 0.0, 5.1}),
+          HysteresisOperator(LonelyModel{testing::random_model(rng, PreisachGrid{0.0, 5.1, 8}),
+                                         {0.3, 0.1, 0.0, 0.2, 0.05, 0.0, 0.1, 0.02}})};
 }
 
 TEST(Operator, InverseOfForwardReproducesTheTargetsForEveryFamily) {
@@ -38,7 +40,9 @@ TEST(Operator, InverseOfForwardReproducesTheTargetsForEveryFamily) {
     std::vector<char> starts(u.size(), 0);
     for (std::size_t t = 0; t < u.size(); ++t) {
       u[t] = U(rng);
-      starts[t] = t % 100 == 0;  // four segments, each from the initial state
+      // Four segments, each from the initial state; the third after a load increase (the
+      // lonely model re-arms with the opposite sign there).
+      starts[t] = t % 100 != 0 ? kContinue : (t == 200 ? kRestartAfterLoadIncrease : kRestart);
     }
     const std::vector<double> y = op.simulate(u, starts);
     const std::vector<InverseStep> inv = op.invert(y, starts);

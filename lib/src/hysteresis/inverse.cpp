@@ -25,49 +25,30 @@ double PreisachInverter::output_at(const PreisachState& state, double u) {
   return model_->output(scratch_);
 }
 
-// Solves y(u) = target for u between u0 (current input) and u1 (path end), y monotone.
-double PreisachInverter::solve_on_path(const PreisachState& state, double u0, double u1,
-                                       double target) {
-  const bool up = u1 > u0;
-  const PreisachGrid& g = model_->grid();
-  const double h = g.step();
-  // Breakpoints strictly between u0 and u1, in path order: grid nodes and the earlier
-  // extrema of the memory that the move will wipe out.
-  breaks_.clear();
-  const double lo = std::min(u0, u1), hi = std::max(u0, u1);
-  for (int k = 1; k < g.levels; ++k) {
-    const double x = g.lo + k * h;
-    if (x > lo && x < hi) breaks_.push_back(x);
-  }
-  const auto pts = state.turning_points();
-  for (std::size_t i = 1; i + 1 < pts.size(); ++i) {
-    if (pts[i] > lo && pts[i] < hi) breaks_.push_back(pts[i]);
-  }
-  if (up) {
-    std::sort(breaks_.begin(), breaks_.end());
-  } else {
-    std::sort(breaks_.begin(), breaks_.end(), std::greater<>());
-  }
-  breaks_.push_back(u1);
-  // Direction of the output along the path, and the first breakpoint at or past the target.
-  const double y0 = model_->output(state);
-  const double y1 = output_at(state, u1);
+namespace detail {
+
+// Solves y(u) = target on a monotone path from u0 (output y0) to breaks.back(), where y is
+// quadratic between consecutive entries of `breaks` (sorted in path order, ending at the path
+// end): bisection over the breakpoints, then the piece's quadratic through three points.
+template <class OutputAt>
+double solve_monotone_path(OutputAt&& y_at, double u0, double y0, const std::vector<double>& breaks,
+                           double target) {
+  const double y1 = y_at(breaks.back());
   const double dir = y1 >= y0 ? 1.0 : -1.0;
-  std::size_t a = 0, b = breaks_.size() - 1;  // invariant: the target lies at or before breaks_[b]
+  std::size_t a = 0, b = breaks.size() - 1;  // invariant: the target lies at or before breaks[b]
   while (a < b) {
     const std::size_t mid = (a + b) / 2;
-    if (dir * (output_at(state, breaks_[mid]) - target) >= 0.0) {
+    if (dir * (y_at(breaks[mid]) - target) >= 0.0) {
       b = mid;
     } else {
       a = mid + 1;
     }
   }
-  const double ub = breaks_[b];
-  const double ua = b == 0 ? u0 : breaks_[b - 1];
-  // y is quadratic on [ua, ub]: through three points, then the root inside.
-  const double ya = b == 0 ? y0 : output_at(state, ua);
-  const double yb = output_at(state, ub);
-  const double ym = output_at(state, 0.5 * (ua + ub));
+  const double ub = breaks[b];
+  const double ua = b == 0 ? u0 : breaks[b - 1];
+  const double ya = b == 0 ? y0 : y_at(ua);
+  const double yb = y_at(ub);
+  const double ym = y_at(0.5 * (ua + ub));
   const double C = 2.0 * (yb - 2.0 * ym + ya);
   const double B = yb - ya - C;
   const double c0 = ya - target;
@@ -83,34 +64,126 @@ double PreisachInverter::solve_on_path(const PreisachState& state, double u0, do
   return ua + std::clamp(t, 0.0, 1.0) * (ub - ua);
 }
 
-InverseStep PreisachInverter::step(PreisachState& state, double target) {
-  const double u0 = std::clamp(state.input(), u_min_, u_max_);
-  const double y0 = model_->output(state);
-  InverseStep r;
-  const double scale = std::abs(model_->total_mass()) + std::abs(model_->bias()) + 1e-300;
-  if (std::abs(target - y0) <= 1e-14 * scale) {
-    r.input = state.input();
-    r.output = y0;
-    return r;
+// Breakpoints of a Preisach path from u0 to u1 (exclusive), in path order, then u1: grid nodes
+// and the memory's earlier extrema that the move wipes out, plus any `extra` points.
+void preisach_path_breaks(const PreisachGrid& g, const PreisachState& state, double u0, double u1,
+                          std::initializer_list<double> extra, std::vector<double>& breaks) {
+  breaks.clear();
+  const double lo = std::min(u0, u1), hi = std::max(u0, u1);
+  const double h = g.step();
+  for (int k = 1; k < g.levels; ++k) {
+    const double x = g.lo + k * h;
+    if (x > lo && x < hi) breaks.push_back(x);
   }
-  const double y_up = output_at(state, u_max_);
-  const double y_down = output_at(state, u_min_);
+  const auto pts = state.turning_points();
+  for (std::size_t i = 1; i + 1 < pts.size(); ++i) {
+    if (pts[i] > lo && pts[i] < hi) breaks.push_back(pts[i]);
+  }
+  for (double x : extra) {
+    if (x > lo && x < hi) breaks.push_back(x);
+  }
+  if (u1 > u0) {
+    std::sort(breaks.begin(), breaks.end());
+  } else {
+    std::sort(breaks.begin(), breaks.end(), std::greater<>());
+  }
+  breaks.push_back(u1);
+}
+
+}  // namespace detail
+
+double PreisachInverter::solve_on_path(const PreisachState& state, double u0, double u1,
+                                       double target) {
+  detail::preisach_path_breaks(model_->grid(), state, u0, u1, {}, breaks_);
+  return detail::solve_monotone_path([&](double u) { return output_at(state, u); }, u0,
+                                     model_->output(state), breaks_, target);
+}
+
+namespace detail {
+
+// One exact compensation step for a path-monotone operator: pick the direction whose path
+// reaches the target (rising to u_max, or falling to u_min) and solve on it; otherwise
+// saturate at the limit that comes closest and flag. `solve(u_end)` solves on a path.
+template <class OutputAt, class Solve>
+InverseStep monotone_inverse_step(OutputAt&& y_at, Solve&& solve, double u0, double y0,
+                                  double u_min, double u_max, double target, double scale) {
+  InverseStep r;
+  r.input = u0;
+  const bool admissible = u0 >= u_min && u0 <= u_max;  // the memory's input may lie outside
+  if (admissible && std::abs(target - y0) <= 1e-14 * scale) return r;
+  const double y_up = y_at(u_max), y_down = y_at(u_min);
   auto between = [](double v, double a, double b) {
     return v >= std::min(a, b) && v <= std::max(a, b);
   };
   if (between(target, y0, y_up) && y_up != y0) {
-    r.input = solve_on_path(state, u0, u_max_, target);
+    r.input = solve(u_max);
   } else if (between(target, y0, y_down) && y_down != y0) {
-    r.input = solve_on_path(state, u0, u_min_, target);
+    r.input = solve(u_min);
   } else {
-    // Unreachable: go to the limit whose output comes closest.
     r.reached = false;
     const double e_up = std::abs(y_up - target), e_down = std::abs(y_down - target),
                  e0 = std::abs(y0 - target);
-    r.input = e_up <= e_down ? (e_up < e0 ? u_max_ : u0) : (e_down < e0 ? u_min_ : u0);
+    r.input = e_up <= e_down ? (e_up < e0 || !admissible ? u_max : u0)
+                             : (e_down < e0 || !admissible ? u_min : u0);
   }
+  // A path that starts outside the admissible range may solve outside it: saturate, flag.
+  const double clamped = std::clamp(r.input, u_min, u_max);
+  if (clamped != r.input) {
+    r.input = clamped;
+    r.reached = false;
+  }
+  return r;
+}
+
+}  // namespace detail
+
+InverseStep PreisachInverter::step(PreisachState& state, double target) {
+  const double u0 = state.input();  // the path starts where the memory is
+  const double y0 = model_->output(state);
+  const double scale = std::abs(model_->total_mass()) + std::abs(model_->bias()) + 1e-300;
+  InverseStep r =
+      detail::monotone_inverse_step([&](double u) { return output_at(state, u); },
+                                    [&](double u1) { return solve_on_path(state, u0, u1, target); },
+                                    u0, y0, u_min_, u_max_, target, scale);
   state.apply(r.input);
   r.output = model_->output(state);
+  return r;
+}
+
+// ---------------------------------------------------------------- lonely stroke
+
+LonelyInverter::LonelyInverter(const LonelyModel& model, double u_min, double u_max)
+    : model_(&model),
+      u_min_(std::max(u_min, model.preisach.grid().lo)),
+      u_max_(std::min(u_max, model.preisach.grid().hi)),
+      scratch_(LonelyState::initial(model)) {
+  model.validate();
+  if (!(u_min_ < u_max_)) throw_invalid("inverse: empty input range [{}, {}]", u_min, u_max);
+}
+
+double LonelyInverter::output_at(const LonelyState& state, double u) {
+  scratch_.preisach = state.preisach;
+  scratch_.running_max = state.running_max;
+  scratch_.sigma = state.sigma;
+  return lonely_step(*model_, scratch_, u);
+}
+
+InverseStep LonelyInverter::step(LonelyState& state, double target) {
+  const double u0 = state.preisach.input();
+  const double y0 = lonely_output(*model_, state);
+  double scale =
+      std::abs(model_->preisach.total_mass()) + std::abs(model_->preisach.bias()) + 1e-300;
+  for (double w : model_->column_weights) scale += std::abs(w);
+  auto y_at = [&](double u) { return output_at(state, u); };
+  InverseStep r = detail::monotone_inverse_step(
+      y_at,
+      [&](double u1) {
+        detail::preisach_path_breaks(model_->preisach.grid(), state.preisach, u0, u1,
+                                     {state.running_max}, breaks_);
+        return detail::solve_monotone_path(y_at, u0, y0, breaks_, target);
+      },
+      u0, y0, u_min_, u_max_, target, scale);
+  r.output = lonely_step(*model_, state, r.input);
   return r;
 }
 

@@ -50,6 +50,7 @@ InverseStep PolynomialModel::inverse(double target, double previous) const {
 std::string HysteresisOperator::family() const {
   if (std::holds_alternative<PreisachModel>(model_)) return "preisach";
   if (std::holds_alternative<GpiModel>(model_)) return "gpi";
+  if (std::holds_alternative<LonelyModel>(model_)) return "lonely";
   return std::get<PolynomialModel>(model_).coefficients.size() > 2 ? "poly2" : "linear";
 }
 
@@ -60,6 +61,8 @@ std::pair<double, double> own_range(const HysteresisOperator::Variant& v) {
         using T = std::decay_t<decltype(m)>;
         if constexpr (std::is_same_v<T, PreisachModel>) {
           return {m.grid().lo, m.grid().hi};
+        } else if constexpr (std::is_same_v<T, LonelyModel>) {
+          return {m.preisach.grid().lo, m.preisach.grid().hi};
         } else {
           return {m.v_min, m.v_max};
         }
@@ -100,6 +103,13 @@ std::vector<double> HysteresisOperator::simulate(std::span<const double> u,
       if (restart(t)) s = GpiState::at_lower_turning_point(*g, g->v_min);
       y[t] = gpi_step(*g, s, u[t]);
     }
+  } else if (const auto* l = std::get_if<LonelyModel>(&model_)) {
+    LonelyState s = LonelyState::initial(*l);
+    for (std::size_t t = 0; t < u.size(); ++t) {
+      if (restart(t))
+        s = LonelyState::initial(*l, starts.empty() ? static_cast<char>(kRestart) : starts[t]);
+      y[t] = lonely_step(*l, s, u[t]);
+    }
   } else {
     const auto& poly = std::get<PolynomialModel>(model_);
     for (std::size_t t = 0; t < u.size(); ++t) y[t] = poly(u[t]);
@@ -125,6 +135,14 @@ std::vector<InverseStep> HysteresisOperator::invert(std::span<const double> targ
       if (restart(t)) s = GpiState::at_lower_turning_point(*g, g->v_min);
       out[t] = inv.step(s, targets[t]);
     }
+  } else if (const auto* l = std::get_if<LonelyModel>(&model_)) {
+    LonelyInverter inv(*l, input_min_, input_max_);
+    LonelyState s = LonelyState::initial(*l);
+    for (std::size_t t = 0; t < targets.size(); ++t) {
+      if (restart(t))
+        s = LonelyState::initial(*l, starts.empty() ? static_cast<char>(kRestart) : starts[t]);
+      out[t] = inv.step(s, targets[t]);
+    }
   } else {
     const auto& poly = std::get<PolynomialModel>(model_);
     double prev = poly.v_min;
@@ -146,6 +164,11 @@ HysteresisOperator HysteresisOperator::with_output_affine(double gain, double of
     for (double& w : m.weights) w *= gain;
     m.bias = m.bias * gain + offset;
     return HysteresisOperator(m);
+  }
+  if (const auto* l = std::get_if<LonelyModel>(&model_)) {
+    LonelyModel m{l->preisach.with_output_affine(gain, offset), l->column_weights};
+    for (double& w : m.column_weights) w *= gain;
+    return HysteresisOperator(m, input_min_, input_max_);
   }
   PolynomialModel poly = std::get<PolynomialModel>(model_);
   for (double& c : poly.coefficients) c *= gain;

@@ -7,6 +7,7 @@
 #include <set>
 
 #include "scpkit/error.hpp"
+#include "scpkit/identification/lonely_fit.hpp"
 #include "scpkit/identification/polynomial_fit.hpp"
 
 namespace scpkit {
@@ -91,7 +92,8 @@ AugmentedFit fit_augmented(std::span<const double> load, std::span<const double>
   std::vector<int> block(n, 0);
   for (std::size_t k = 0; k < fit.segments.size(); ++k) {
     const LoadSegment& s = fit.segments[k];
-    starts[s.first] = 1;
+    starts[s.first] =
+        k > 0 && s.load > fit.segments[k - 1].load ? kRestartAfterLoadIncrease : kRestart;
     for (std::size_t t = s.first; t < s.first + s.count; ++t) block[t] = static_cast<int>(k);
   }
   for (std::size_t t = 0; t < n; ++t) h[t] = (output[t] - m.f1(load[t])) / m.f2(load[t]);
@@ -107,6 +109,10 @@ AugmentedFit fit_augmented(std::span<const double> load, std::span<const double>
     const GpiFit gf = fit_gpi(input, h, starts, options.gpi);
     m.h = HysteresisOperator(gf.model);
     fit.report = gf.summary.BriefReport();
+  } else if (options.family == "lonely") {
+    const LonelyFit lf = fit_lonely(input, h, starts, options.lonely);
+    m.h = HysteresisOperator(lf.model, lf.input_min, lf.input_max);
+    fit.report = lf.report;
   } else if (options.family == "linear" || options.family == "poly2") {
     m.h = HysteresisOperator(fit_polynomial(input, h, options.family == "linear" ? 1 : 2));
     fit.report = fmt::format("{} H fit", options.family);

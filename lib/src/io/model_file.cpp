@@ -25,6 +25,15 @@ json operator_json(const HysteresisOperator& op) {
         {"bias", p->bias()},
         {"weights", std::vector<double>(p->weights().begin(), p->weights().end())},
         {"weights_are", "cell masses, row-major over beta level i then alpha level j >= i"}};
+  } else if (const auto* l = std::get_if<LonelyModel>(&op.model())) {
+    const PreisachGrid& g = l->preisach.grid();
+    j["preisach"] = {{"lo", g.lo},
+                     {"hi", g.hi},
+                     {"levels", g.levels},
+                     {"bias", l->preisach.bias()},
+                     {"weights", std::vector<double>(l->preisach.weights().begin(),
+                                                     l->preisach.weights().end())}};
+    j["running_max_weights"] = l->column_weights;
   } else if (const auto* m = std::get_if<GpiModel>(&op.model())) {
     j["gpi"] = {{"right", {{"a", m->right.a}, {"b", m->right.b}}},
                 {"left", {{"a", m->left.a}, {"b", m->left.b}}},
@@ -43,13 +52,20 @@ json operator_json(const HysteresisOperator& op) {
 
 HysteresisOperator operator_from_json(const json& j) {
   const std::string family = j.at("family").get<std::string>();
-  if (family == "preisach") {
+  if (family == "preisach" || family == "lonely") {
     const json& p = j.at("preisach");
     PreisachGrid g{p.at("lo").get<double>(), p.at("hi").get<double>(), p.at("levels").get<int>()};
     const auto w = p.at("weights").get<std::vector<double>>();
     PreisachModel model(
         g, Eigen::Map<const Eigen::VectorXd>(w.data(), static_cast<Eigen::Index>(w.size())),
         p.at("bias").get<double>());
+    if (family == "lonely") {
+      LonelyModel l{std::move(model), j.at("running_max_weights").get<std::vector<double>>()};
+      l.validate();
+      const auto r = j.at("input_range").get<std::vector<double>>();
+      if (r.size() != 2) throw InvalidArgument("input_range must be [min, max]");
+      return HysteresisOperator(std::move(l), r[0], r[1]);
+    }
     if (j.contains("input_range")) {
       const auto r = j.at("input_range").get<std::vector<double>>();
       if (r.size() != 2) throw InvalidArgument("input_range must be [min, max]");

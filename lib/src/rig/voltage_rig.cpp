@@ -101,9 +101,12 @@ RigRun run_voltage_rig(const RigSpec& spec) {
         viscous = y + (viscous - y) * std::exp(-p.dwell_s / e.creep_tau_s);
         y = (1.0 - e.creep) * y + e.creep * viscous;
       }
-      // Lonely stroke, re-armed at every load change: the first rise differs from later cycles.
+      // Lonely stroke, re-armed at every load change: the first rise differs from later
+      // cycles; after a load increase the repeatable loop lies on the other side (paper 001's
+      // open case), so the offset changes sign.
       running_max = std::max(running_max, v_one[i]);
-      y -= e.lonely_stroke * truth.f2(F) * running_max / p.v_max;
+      const double lonely_sign = k > 0 && p.loads_g[k] > p.loads_g[k - 1] ? -1.0 : 1.0;
+      y -= lonely_sign * e.lonely_stroke * truth.f2(F) * running_max / p.v_max;
       time_s.push_back(t);
       load_g.push_back(p.loads_g[k]);
       volts.push_back(v_one[i]);

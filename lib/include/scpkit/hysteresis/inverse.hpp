@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "scpkit/hysteresis/gpi.hpp"
+#include "scpkit/hysteresis/lonely.hpp"
 #include "scpkit/hysteresis/preisach.hpp"
 
 namespace scpkit {
@@ -48,6 +49,21 @@ class PreisachInverter {
   const PreisachModel* model_;
   double u_min_, u_max_;
   PreisachState scratch_;
+  std::vector<double> breaks_;
+};
+
+/// Exact inverse of the lonely-stroke model: the Preisach path plus sigma * g(max(M, u)),
+/// still piecewise quadratic, with the running maximum M as one more breakpoint.
+class LonelyInverter {
+ public:
+  LonelyInverter(const LonelyModel& model, double u_min, double u_max);
+  InverseStep step(LonelyState& state, double target);
+
+ private:
+  double output_at(const LonelyState& state, double u);
+  const LonelyModel* model_;
+  double u_min_, u_max_;
+  LonelyState scratch_;
   std::vector<double> breaks_;
 };
 

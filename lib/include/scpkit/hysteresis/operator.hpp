@@ -10,6 +10,7 @@
 
 #include "scpkit/hysteresis/gpi.hpp"
 #include "scpkit/hysteresis/inverse.hpp"
+#include "scpkit/hysteresis/lonely.hpp"
 #include "scpkit/hysteresis/preisach.hpp"
 
 namespace scpkit {
@@ -27,20 +28,21 @@ struct PolynomialModel {
 
 class HysteresisOperator {
  public:
-  using Variant = std::variant<PreisachModel, GpiModel, PolynomialModel>;
+  using Variant = std::variant<PreisachModel, GpiModel, PolynomialModel, LonelyModel>;
   /// The admissible input range is the model's own (GPI, polynomial: [v_min, v_max];
   /// Preisach: its grid) unless given, as it must be for a Preisach model whose grid extends
   /// beyond the identified inputs.
   explicit HysteresisOperator(Variant model);
   HysteresisOperator(Variant model, double input_min, double input_max);
 
-  /// "preisach", "gpi", "linear" or "poly2".
+  /// "preisach", "gpi", "linear", "poly2" or "lonely".
   std::string family() const;
   const Variant& model() const { return model_; }
   double input_min() const;
   double input_max() const;
 
-  /// Runs the inputs; the memory starts (and restarts where `starts` is set) in the family's
+  /// Runs the inputs; the memory starts (and restarts where `starts` is set, see RestartFlag;
+  /// the lonely model also re-arms with the sign of the load change) in the family's
   /// initial state at the lowest admissible input: Preisach negative saturation, GPI the
   /// lower turning point of the major loop at v_min.
   std::vector<double> simulate(std::span<const double> input,

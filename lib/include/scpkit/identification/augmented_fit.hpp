@@ -14,6 +14,7 @@
 
 #include "scpkit/hysteresis/augmented.hpp"
 #include "scpkit/identification/gpi_fit.hpp"
+#include "scpkit/identification/lonely_fit.hpp"
 #include "scpkit/identification/preisach_fit.hpp"
 #include "scpkit/metrics.hpp"
 
@@ -28,9 +29,10 @@ struct LoadSegment {
 };
 
 struct AugmentedFitOptions {
-  std::string family = "gpi";  ///< gpi, preisach, linear or poly2
+  std::string family = "gpi";  ///< gpi, preisach, lonely, linear or poly2
   PreisachFitOptions preisach;
   GpiFitOptions gpi;
+  LonelyFitOptions lonely;
 };
 
 struct AugmentedFit {
