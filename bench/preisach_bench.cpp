@@ -4,9 +4,11 @@
 //   identification, L = 40, 20 000 rows:   <= 2 s
 #include <benchmark/benchmark.h>
 
+#include <cmath>
 #include <random>
 #include <vector>
 
+#include "scpkit/hysteresis/gpi.hpp"
 #include "scpkit/hysteresis/inverse.hpp"
 #include "scpkit/hysteresis/preisach.hpp"
 #include "scpkit/identification/preisach_fit.hpp"
@@ -77,6 +79,51 @@ void BM_PreisachInverseStep(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations());
 }
 BENCHMARK(BM_PreisachInverseStep)->Arg(10)->Arg(20)->Arg(40);
+
+// GPI compensation step, 11 operators (target: <= 0.5 us; paper 000: 1.3 ms in MATLAB).
+void BM_GpiInverseStep(benchmark::State& state) {
+  GpiModel m;
+  m.right = {1.100, 0.048};
+  m.left = {1.236, 0.088};
+  for (int j = 0; j <= 10; ++j) {
+    m.radii.push_back(j / 10.0);
+    m.weights.push_back(-0.3 * std::exp(-j / 4.0));
+  }
+  m.bias = 0.396;
+  m.v_min = 0.0;
+  m.v_max = 5.1;
+  std::vector<double> v = test_like_input(1 << 12, 8);
+  for (double& x : v) x *= 5.1;
+  GpiState plant = GpiState::at_lower_turning_point(m, 0.0), memory = plant;
+  std::vector<double> targets;
+  for (double x : v) targets.push_back(gpi_step(m, plant, x));
+  GpiInverter inverter(m);
+  std::size_t i = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(inverter.step(memory, targets[i]).input);
+    i = (i + 1) & (targets.size() - 1);
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_GpiInverseStep);
+
+// Paper 001 Algorithm 1 (corrected), for comparison with the exact Preisach inverse.
+void BM_IterativeInverseStep(benchmark::State& state) {
+  const PreisachModel model = random_model(20, 6);
+  const std::vector<double> u = test_like_input(1 << 12, 7);
+  PreisachState plant = PreisachState::negative_saturation(model.grid());
+  std::vector<double> targets;
+  for (double v : u) targets.push_back(model.step(plant, v));
+  PreisachState memory = PreisachState::negative_saturation(model.grid());
+  std::size_t i = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(
+        iterative_inverse_step(model, memory, targets[i], 0.0, 1.0, 0.05, 1e-9).step.input);
+    i = (i + 1) & (targets.size() - 1);
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_IterativeInverseStep);
 
 void BM_PreisachIdentification(benchmark::State& state) {
   const int L = static_cast<int>(state.range(0));

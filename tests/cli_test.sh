@@ -78,9 +78,9 @@ printf 'test = "voltage"\nlength_mm = 70\n[voltage]\nloads_g = [120, 130]\n' >"$
 check "augmented predict warns outside the load range" 0 "outside the identified range" -- "$bin" predict "$work/v-gpi.json" "$work/v-heavy.csv" -o "$work/v-heavy-pred.csv"
 check "augmented invert" 0 "[0-9]+ unreachable; tracking" -- "$bin" invert "$work/v-gpi.json" "$ex/voltage-8loads.csv" -o "$work/v-inv.csv"
 assert "augmented invert keeps the load column" grep -q "^time_s,segment,load_g,voltage_V,disp_mm," "$work/v-inv.csv"
-for p in 2 4 6; do
-  "$bin" simulate "$src/examples/rig/pair-${p}ply.toml" -o "$work/pair-${p}ply.csv" >/dev/null
-  assert "example data $p-ply regenerate byte for byte" cmp -s "$work/pair-${p}ply.csv" "$ex/pair-${p}ply.csv"
+for name in pair-2ply pair-4ply pair-6ply voltage-8loads voltage-lonely; do
+  "$bin" simulate "$src/examples/rig/$name.toml" -o "$work/$name.csv" >/dev/null
+  assert "example data $name regenerates byte for byte" cmp -s "$work/$name.csv" "$ex/$name.csv"
 done
 check "invert --help" 0 "usage: scpkit invert" -- "$bin" invert --help
 check "invert a measured response" 0 "[0-9]+ unreachable; tracking" -- "$bin" invert "$work/m2.json" "$ex/pair-2ply.csv" -o "$work/inv.csv"

@@ -255,4 +255,63 @@ InverseStep GpiInverter::step(GpiState& state, double target) {
   return r;
 }
 
+// ---------------------------------------------------------------- labelled comparisons
+
+PaperPiInverse paper_pi_inverse(const std::vector<double>& r, const std::vector<double>& p) {
+  if (r.size() != p.size() || p.empty()) throw_invalid("paper_pi_inverse: one weight per radius");
+  if (p[0] == 0.0) throw_invalid("paper_pi_inverse: p_0 must not be zero");
+  PaperPiInverse inv;
+  inv.radii.assign(r.size(), 0.0);
+  inv.weights.assign(p.size(), 0.0);
+  inv.weights[0] = 1.0 / p[0];
+  double partial = p[0];  // p_0 + sum_{j<k} p_j
+  for (std::size_t j = 1; j < r.size(); ++j) {
+    double rj = p[0] * r[j];
+    for (std::size_t k = 1; k < j; ++k) rj += p[k] * (r[j] - r[k]);
+    inv.radii[j] = rj;
+    const double next = partial + p[j];
+    inv.weights[j] = -p[j] / (next * partial);
+    partial = next;
+  }
+  return inv;
+}
+
+IterativeInverseResult iterative_inverse_step(const PreisachModel& model, PreisachState& state,
+                                              double target, double u_min, double u_max, double d0,
+                                              double tolerance, int max_iterations) {
+  if (!(d0 > 0.0) || !(tolerance > 0.0) || !(u_min < u_max))
+    throw_invalid("iterative inverse: bad settings");
+  IterativeInverseResult res;
+  PreisachState scratch = state;
+  auto y_at = [&](double u) {
+    scratch = state;
+    scratch.apply(u);
+    return model.output(scratch);
+  };
+  double u = std::clamp(state.input(), u_min, u_max);
+  double y = y_at(u);
+  // Direction: the one whose path's end lies on the target's side.
+  const double y_up = y_at(u_max);
+  const double dir = (target - y) * (y_up - y) > 0.0 ? 1.0 : -1.0;
+  double step = d0;
+  const double floor = 1e-12 * (u_max - u_min);
+  while (std::abs(target - y) > tolerance && res.iterations < max_iterations && step > floor) {
+    ++res.iterations;
+    const double u_try = std::clamp(u + dir * step, u_min, u_max);
+    const double y_try = y_at(u_try);
+    if ((target - y_try) * (target - y) < 0.0) {
+      step *= 0.5;  // would overshoot: halve (the printed version steps by d, not d0)
+      continue;
+    }
+    if (u_try == u) break;  // at the limit
+    u = u_try;
+    y = y_try;
+  }
+  res.step.input = u;
+  res.step.reached = std::abs(target - y) <= tolerance;
+  state.apply(u);
+  res.step.output = model.output(state);
+  return res;
+}
+
 }  // namespace scpkit

@@ -87,4 +87,33 @@ class GpiInverter {
   std::vector<std::pair<double, double>> breaks_;  // (g_j, p_j)
 };
 
+/// Paper 000 Eq. 11 as printed: the inverse of a classical PI operator
+/// Pi[x] = p_0 x + sum_{k>=1} p_k F_{r_k}[x] (F_r the play operator, zero initial state) is
+/// Pi^-1[y] = p^_0 y + sum_k p^_k F_{r^_k}[y], with
+///   r^_j = p_0 r_j + sum_{k<j} p_k (r_j - r_k),   p^_0 = 1 / p_0,
+///   p^_k = -p_k / ((p_0 + sum_{j<=k} p_j)(p_0 + sum_{j<k} p_j)).
+/// Kept as a labelled comparison: with the paper's all-negative weights it gives negative radii
+/// (no play operator has one), which is why scpkit inverts Pi+ = -Pi on -y instead, or, more
+/// generally, solves along the input path from the tracked memory (GpiInverter).
+struct PaperPiInverse {
+  std::vector<double> radii;    ///< r^_k, k >= 1 (index 0 unused, 0)
+  std::vector<double> weights;  ///< p^_0, p^_k
+};
+PaperPiInverse paper_pi_inverse(const std::vector<double>& radii,
+                                const std::vector<double>& weights);
+
+/// Paper 001 Algorithm 1, corrected (a labelled comparison for the exact inverters): from the
+/// current memory, step the input by d0 in the direction that moves the output toward the
+/// target, halve the step whenever it would overshoot, stop within `tolerance` or when the
+/// step falls below 1e-12 of the range; inputs stay within [u_min, u_max] and a target beyond
+/// the limit is flagged. The printed algorithm compares u with itself, fits two unknowns from
+/// one equation, steps by d instead of d0, ignores the decreasing direction and never clamps.
+struct IterativeInverseResult {
+  InverseStep step;
+  int iterations = 0;
+};
+IterativeInverseResult iterative_inverse_step(const PreisachModel& model, PreisachState& state,
+                                              double target, double u_min, double u_max, double d0,
+                                              double tolerance, int max_iterations = 200);
+
 }  // namespace scpkit
