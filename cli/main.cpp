@@ -24,6 +24,9 @@ const std::vector<Command>& commands() {
        scpkit::cli::run_invert},
       {"map", "map a thread model to another ply count and to an SCP actuator",
        scpkit::cli::run_map},
+      {"design", "predict one actuator design before it is made", scpkit::cli::run_design},
+      {"sweep", "rank many actuator designs (threads, cluster shards)", scpkit::cli::run_sweep},
+      {"merge", "join the shards of a sweep into the unsharded result", scpkit::cli::run_merge},
       {"simulate", "synthetic measurements from the virtual test rig", scpkit::cli::run_simulate},
   };
   return list;

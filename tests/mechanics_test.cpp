@@ -25,8 +25,9 @@ CoilGeometry coil(double d_mm, double D_mm, double n, int legs = 1) {
 TEST(Coil, StiffnessIsTheHelicalSpringFormula) {
   // K = G d^4 / (8 n D^3), recomputed by hand: G = 1 GPa, d = 1 mm, D = 5 mm, n = 10.
   EXPECT_NEAR(spring_stiffness(1e9, coil(1.0, 5.0, 10)), 1e9 * 1e-12 / (8 * 10 * 125e-9), 1e-9);
+  // Two legs sharing the 10 coils: two springs of 5 coils in parallel, 4 times as stiff.
   EXPECT_NEAR(spring_stiffness(1e9, coil(1.0, 5.0, 10, 2)),
-              2 * spring_stiffness(1e9, coil(1.0, 5.0, 10)), 1e-9);
+              4 * spring_stiffness(1e9, coil(1.0, 5.0, 10)), 1e-9);
 }
 
 TEST(Coil, ReproducesPaper002Table1WithTheMeanDiameter) {

@@ -47,7 +47,9 @@ std::string CoilGeometry::caution() const {
 double spring_stiffness(double G, const CoilGeometry& g) {
   g.validate();
   if (!(G > 0.0)) throw_invalid("shear modulus must be > 0, got {} Pa", G);
-  return g.legs * G * std::pow(g.wire_d_m, 4) / (8.0 * g.coils * std::pow(g.mean_D_m, 3));
+  // n counts the coils of all legs: each leg has n / legs, and the legs act in parallel.
+  const double per_leg = g.coils / g.legs;
+  return g.legs * G * std::pow(g.wire_d_m, 4) / (8.0 * per_leg * std::pow(g.mean_D_m, 3));
 }
 
 Uncertain spring_stiffness(const Uncertain& G, const CoilGeometry& g, const CoilTolerances& t) {

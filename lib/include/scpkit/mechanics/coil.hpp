@@ -2,7 +2,12 @@
 // Helical-spring model of a coiled actuator (paper 002 Eq. 4, Wahl, "Mechanical Springs",
 // ch. 10):
 //
-//   K = G d^4 / (8 n D^3)    per leg;  legs in parallel add: K_total = legs * K
+//   K_leg = G d^4 / (8 n_leg D^3),  n_leg = n / legs;  legs in parallel: K = legs * K_leg
+//
+// n is the coil count of the whole actuator (all legs), as paper 002 Table 1 gives one n per
+// actuator: read per leg, its 2-ply actuator (n = 440 over about 100 mm) would have a pitch of
+// 0.23 mm, below its 0.25 mm wire, which no helix has. Stiffness ratios between actuators with
+// the same number of legs are unaffected by this reading.
 //
 // d wire (thread) diameter, D the *mean* coil diameter, n active coils, G shear modulus.
 // Departure from paper 002: the paper calls D the outer diameter. Its Table 1 ratios
@@ -24,7 +29,7 @@ struct Uncertain {
 struct CoilGeometry {
   double wire_d_m = 0.0;  ///< d, thread diameter
   double mean_D_m = 0.0;  ///< D, mean coil diameter (outer diameter minus d)
-  double coils = 0.0;     ///< n, active coils
+  double coils = 0.0;     ///< n, active coils of the whole actuator (all legs)
   int legs = 1;           ///< 1, or 2 for a double-backed actuator
   double length_m = 0.0;  ///< resting length (0 = unknown)
 
@@ -43,7 +48,7 @@ struct CoilTolerances {
   double coils_rel = 0.05;    ///< sigma_n / n = 5 %
 };
 
-/// K = legs * G d^4 / (8 n D^3), N/m.
+/// K = legs^2 G d^4 / (8 n D^3) (legs in parallel, n / legs coils each), N/m.
 double spring_stiffness(double shear_modulus_Pa, const CoilGeometry& g);
 
 /// Stiffness with first-order propagated uncertainty from the tolerances and sigma_G:
