@@ -159,9 +159,12 @@ int run_design(const std::vector<std::string>& args) {
       r.stiffness_N_per_m.value, r.stiffness_N_per_m.sigma, r.gain.value, r.gain.sigma,
       ctx.characterisation.plies);
   std::cout << fmt::format(
-      "  stroke {:.3f} +- {:.3f} mm ({:.2f} % strain) between the working loads; hysteresis {:.1f} "
-      "% of stroke\n",
-      r.stroke_mm, r.stroke_sigma_mm, r.stroke_pct, r.hysteresis_pct);
+      "  stroke {:.3f} +- {:.3f} mm ({:.2f} % strain) {}\n", r.stroke_mm, r.stroke_sigma_mm,
+      r.stroke_pct,
+      r.hysteresis_pct >= 0.0
+          ? fmt::format("between the working loads; hysteresis {:.1f} % of stroke",
+                        r.hysteresis_pct)
+          : std::string("over the protocol"));
   if (r.thermal_stroke_mm >= 0.0) {
     std::cout << fmt::format(
         "  thermal stroke at {:.4g} g: {:.3f} mm{}\n", d.working_load_N / kGram,

@@ -263,7 +263,7 @@ int run_fit(const std::vector<std::string>& args) {
   const double scale = display_scale(out.name);
   mf.fit_metrics = train.scaled(scale);
   mf.cv_rms_pct_range = cv_rms;
-  mf.data_file = data_path;
+  mf.data_file = std::filesystem::path(data_path).filename().string();  // portable: no folders
   if (paired) {
     try {
       mf.scp_gain = fit_scp_gain(m.find(Quantity::kThreadStrain)->values,

@@ -118,5 +118,29 @@ check "rig typo" 3 "typo.toml:3:1: unknown key 'nosie_mm'" -- "$bin" simulate "$
 printf 'specimen = "thread"\n[effects]\ncreep = 3\n' >"$work/creep.toml"
 check "rig out of range" 3 "creep is a fraction" -- "$bin" simulate "$work/creep.toml"
 
+# Design and sweeps.
+"$bin" fit "$ex/pair-2ply.csv" -o "$work/thread-2ply.model.json" >/dev/null
+assert "the example thread model regenerates byte for byte" cmp -s "$work/thread-2ply.model.json" "$src/examples/design/thread-2ply.model.json"
+"$bin" fit "$ex/voltage-8loads.csv" --model gpi -o "$work/voltage-gpi.model.json" >/dev/null
+assert "the example voltage model regenerates byte for byte" cmp -s "$work/voltage-gpi.model.json" "$src/examples/design/voltage-gpi.model.json"
+check "design --help" 0 "usage: scpkit design" -- "$bin" design --help
+check "the characterised design reproduces its loop" 0 "against the protocol file's SCP strain: E_max [0-9.]+ %  E_RMS 0\.[0-9]+ %" -- "$bin" design "$src/examples/design/characterised-2ply.toml"
+check "bicep design with the voltage side" 0 "voltage for 8 mm: [0-9.]+ V" -- "$bin" design "$src/examples/design/bicep-design.toml" -o "$work/loop.csv"
+assert "design loop csv" grep -q "^load_g,predicted_scp_strain_pct$" "$work/loop.csv"
+sweep=$src/examples/design/bicep-sweep.toml
+check "sweep needs -o" 2 "-o OUT.csv is required" -- "$bin" sweep "$sweep"
+check "sweep, 1 thread" 0 "2672 of 2672 candidates" -- "$bin" sweep "$sweep" -o "$work/s1.csv" --threads 1
+check "sweep, 2 threads" 0 "feasible" -- "$bin" sweep "$sweep" -o "$work/s2.csv" --threads 2
+assert "same bytes for 1 and 2 threads" cmp -s "$work/s1.csv" "$work/s2.csv"
+check "shard 0/2" 0 "shard 0/2" -- "$bin" sweep "$sweep" -o "$work/sh0.csv" --shard 0/2
+check "shard 1/2 from Slurm's variables" 0 "shard 1/2" -- env SLURM_ARRAY_TASK_ID=1 SLURM_ARRAY_TASK_COUNT=2 "$bin" sweep "$sweep" -o "$work/sh1.csv"
+check "merge" 0 "2 shards merged" -- "$bin" merge "$work/sh1.csv" "$work/sh0.csv" -o "$work/merged.csv"
+assert "merged shards equal the full sweep" cmp -s "$work/merged.csv" "$work/s1.csv"
+check "merge refuses a missing shard" 3 "shards missing: 1" -- "$bin" merge "$work/sh0.csv" -o "$work/bad-merge.csv"
+assert "no output after a refused merge" test ! -e "$work/bad-merge.csv"
+check "bad shard spec" 2 "--shard must be i/N" -- "$bin" sweep "$sweep" -o "$work/x.csv" --shard 2/2
+printf 'thread_model = "nope.json"\n[space]\nplies = [2, 0]\n' >"$work/bad-sweep.toml"
+check "sweep spec errors are located" 3 "bad-sweep.toml:3:13: 'plies' must hold integers 1..100" -- "$bin" sweep "$work/bad-sweep.toml" -o "$work/x.csv"
+
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

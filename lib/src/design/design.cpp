@@ -85,18 +85,24 @@ DesignResult evaluate_design(const ThreadCharacterisation& ch, const Material& m
   ws.loads.clear();
   std::size_t k0 = 0;
   const int half = std::max(1, spec.protocol_steps / 2);
+  const PreisachGrid& grid = ch.thread.grid();
   if (spec.protocol_N.empty()) {
+    // The memory a warm-up cycle lo -> hi -> lo leaves, written down directly: negative
+    // saturation, the maximum hi, the minimum lo (exactly what applying them would give).
     ws.loads.push_back(lo);
+    k0 = 0;
     ramp(ws.loads, lo, hi, half);
     ramp(ws.loads, hi, lo, half);
-    k0 = ws.loads.size() - 1;
-    ramp(ws.loads, lo, hi, half);
-    ramp(ws.loads, hi, lo, half);
+    const double a = std::clamp(scale * hi, grid.lo, grid.hi),
+                 b = std::clamp(scale * lo, grid.lo, grid.hi);
+    ws.state.reset(grid);
+    ws.state.apply(a);
+    ws.state.apply(b);
   } else {
     ws.loads.assign(spec.protocol_N.begin(), spec.protocol_N.end());
+    ws.state.reset(grid);
   }
   const double g = gq.value, offset = ch.scp_gain.offset * gq.value / ch.scp_gain.gain;
-  ws.state = PreisachState::negative_saturation(ch.thread.grid());
   ws.strain.resize(ws.loads.size());
   for (std::size_t k = 0; k < ws.loads.size(); ++k) {
     ws.strain[k] = g * ch.thread.step(ws.state, scale * ws.loads[k]) + offset;
@@ -112,6 +118,7 @@ DesignResult evaluate_design(const ThreadCharacterisation& ch, const Material& m
   } else {
     const auto [mn, mx] = std::minmax_element(ws.strain.begin(), ws.strain.end());
     stroke = *mx - *mn;
+    r.hysteresis_pct = -1.0;  // defined on the major loop only
   }
   r.stroke_pct = 100.0 * stroke;
   r.stroke_mm = stroke * c.length_m * 1e3;

@@ -63,6 +63,15 @@ PreisachState PreisachState::from_turning_points(const PreisachGrid& grid,
   return s;
 }
 
+void PreisachState::reset(const PreisachGrid& grid) {
+  lo_ = grid.lo;
+  hi_ = grid.hi;
+  points_.resize(1);
+  points_[0] = lo_;
+  cache_valid_ = 0;
+  cache_owner_ = 0;
+}
+
 void PreisachState::apply(double u) {
   u = std::clamp(u, lo_, hi_);
   std::size_t n = points_.size() - 1;

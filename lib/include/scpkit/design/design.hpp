@@ -70,7 +70,7 @@ struct DesignResult {
   Uncertain stiffness_N_per_m;
   Uncertain gain;
   double stroke_mm = 0.0, stroke_sigma_mm = 0.0, stroke_pct = 0.0;
-  double hysteresis_pct = 0.0;
+  double hysteresis_pct = 0.0;         ///< -1 for a given protocol (defined on the major loop)
   double thermal_stroke_mm = -1.0;     ///< -1 when no voltage model
   double voltage_for_target_V = -1.0;  ///< -1 when not computed or unreachable
   bool voltage_extrapolated = false;

@@ -57,6 +57,10 @@ class PreisachState {
   /// input. Throws InvalidArgument unless the sequence is alternating and dominant.
   static PreisachState from_turning_points(const PreisachGrid& grid, std::vector<double> points);
 
+  /// Back to negative saturation on `grid`, keeping the allocated memory (for loops that
+  /// evaluate many designs with one state).
+  void reset(const PreisachGrid& grid);
+
   /// Applies input u (clamped to [lo, hi]) with wiping-out. Allocation-free once the memory
   /// has reached its deepest level so far (capacity is reserved up front).
   void apply(double u);
