@@ -54,7 +54,7 @@ Eigen::MatrixXd smoothness_penalty(const PreisachGrid& grid) {
 
 Design make_design(const PreisachGrid& grid, int sign, std::span<const double> input,
                    std::span<const double> output, const std::vector<int>& block_of, int nblocks,
-                   bool with_rank, bool restart) {
+                   bool with_rank, bool restart, const std::vector<int>& segment_of) {
   Design d;
   d.grid = grid;
   const auto n = static_cast<Eigen::Index>(input.size());
@@ -63,7 +63,7 @@ Design make_design(const PreisachGrid& grid, int sign, std::span<const double> i
   d.A.resize(n, p + 1);
   Eigen::VectorXd row(p);
   for (Eigen::Index t = 0; t < n; ++t) {
-    if (restart && t > 0 && block_of[t] != block_of[t - 1])
+    if (restart && t > 0 && segment_of[t] != segment_of[t - 1])
       state = PreisachState::negative_saturation(grid);
     state.apply(input[t]);
     signed_area_fractions(grid, state, row);
@@ -153,6 +153,7 @@ std::vector<char> heldout_eligible(std::span<const double> input, const std::vec
   std::vector<double> lo(nblocks, std::numeric_limits<double>::infinity());
   std::vector<double> hi(nblocks, -std::numeric_limits<double>::infinity());
   for (std::size_t t = 0; t < input.size(); ++t) {
+    if (block_of[t] < 0) continue;  // excluded row
     lo[block_of[t]] = std::min(lo[block_of[t]], input[t]);
     hi[block_of[t]] = std::max(hi[block_of[t]], input[t]);
   }
@@ -318,6 +319,13 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
     block_of = cycle_blocks(input, options.folds);
     nblocks = *std::max_element(block_of.begin(), block_of.end()) + 1;
   }
+  const std::vector<int> segment_of = block_of;  // for restarts: excluded rows keep their block
+  if (!options.exclude.empty()) {
+    if (options.exclude.size() != n) throw_invalid("Preisach fit: exclude mask needs one entry per sample");
+    for (std::size_t t = 0; t < n; ++t) {
+      if (options.exclude[t]) block_of[t] = -1;  // in the memory, not in the least squares
+    }
+  }
 
   PreisachFitSummary summary;
   summary.sign = sign;
@@ -346,7 +354,7 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
     std::vector<Design> shifts;
     for (int k = 0; k < S; ++k) {
       shifts.push_back(make_design(shifted_grid(base, L, k, S), sign, input, output, block_of,
-                                   nblocks, with_rank && k == 0, restart));
+                                   nblocks, with_rank && k == 0, restart, segment_of));
     }
     return shifts;
   };
@@ -402,7 +410,15 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
   summary.unidentified_directions = p + 1 - d.rank;
   summary.termination = converged ? PreisachFitSummary::Termination::kConverged
                                   : PreisachFitSummary::Termination::kNoConvergence;
-  summary.train = error_metrics(output, std::span<const double>(fitted.data(), n));
+  {
+    std::vector<double> measured, predicted;
+    for (std::size_t t = 0; t < n; ++t) {
+      if (block_of[t] < 0) continue;
+      measured.push_back(output[t]);
+      predicted.push_back(fitted[static_cast<Eigen::Index>(t)]);
+    }
+    summary.train = error_metrics(measured, predicted);
+  }
   if (d.unexcited > 0) {
     summary.warnings.push_back(fmt::format(
         "{} of {} cells never switch in the data: {}", d.unexcited, p,

@@ -41,6 +41,9 @@ struct PreisachFitOptions {
   /// Restart the memory (negative saturation) at the start of every given block: segments
   /// that are separate tests, e.g. the constant-load segments of an augmented model.
   bool restart_at_blocks = false;
+  /// Rows to leave out of the least squares (non-zero entries) while their inputs still drive
+  /// the memory: held-out validation on one record. Empty = use every row.
+  std::vector<char> exclude;
   NnlsOptions nnls;
 
   /// False (with the reason) for impossible settings.
