@@ -12,5 +12,6 @@ int run_invert(const std::vector<std::string>& args);
 int run_design(const std::vector<std::string>& args);
 int run_sweep(const std::vector<std::string>& args);
 int run_merge(const std::vector<std::string>& args);
+int run_diagnose(const std::vector<std::string>& args);
 
 }  // namespace scpkit::cli

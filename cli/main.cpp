@@ -27,6 +27,8 @@ const std::vector<Command>& commands() {
       {"design", "predict one actuator design before it is made", scpkit::cli::run_design},
       {"sweep", "rank many actuator designs (threads, cluster shards)", scpkit::cli::run_sweep},
       {"merge", "join the shards of a sweep into the unsharded result", scpkit::cli::run_merge},
+      {"diagnose", "what the model gets wrong, the named cause, the extension's held-out gain",
+       scpkit::cli::run_diagnose},
       {"simulate", "synthetic measurements from the virtual test rig", scpkit::cli::run_simulate},
   };
   return list;

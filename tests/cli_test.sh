@@ -142,5 +142,19 @@ check "bad shard spec" 2 "--shard must be i/N" -- "$bin" sweep "$sweep" -o "$wor
 printf 'thread_model = "nope.json"\n[space]\nplies = [2, 0]\n' >"$work/bad-sweep.toml"
 check "sweep spec errors are located" 3 "bad-sweep.toml:3:13: 'plies' must hold integers 1..100" -- "$bin" sweep "$work/bad-sweep.toml" -o "$work/x.csv"
 
+# diagnose: SPEC's JSON keys; drift hidden in rig data is named.
+printf 'specimen = "thread"\nseed = 11\n[effects]\ndrift = 0.05\n' >"$work/drift.toml"
+"$bin" simulate "$work/drift.toml" -o "$work/drift.csv" >/dev/null
+check "diagnose names a hidden drift" 0 '"cause": "drift"' -- "$bin" diagnose "$work/drift.csv" --json
+if command -v python3 >/dev/null; then
+  assert "diagnose JSON follows SPEC" python3 -c "
+import json,sys; d=json.loads(sys.stdin.read())
+assert set(['input','baseline','findings','cause']) <= set(d), d.keys()
+assert set(['model','rms_pct_range','max_pct_range']) <= set(d['baseline'])
+for f in d['findings']:
+    assert set(['effect','detected','score','evidence','extended_model','heldout_rms_before','heldout_rms_after','gain_pct']) <= set(f), f" \
+    < <("$bin" diagnose "$work/drift.csv" --json 2>/dev/null)
+fi
+
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

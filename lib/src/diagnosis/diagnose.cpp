@@ -1,9 +1,11 @@
 #include "scpkit/diagnosis/diagnose.hpp"
 
+#include <fmt/format.h>
+
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
-#include <fmt/format.h>
+#include <functional>
 #include <numeric>
 #include <random>
 
@@ -65,7 +67,8 @@ double r_squared(const std::vector<double>& r, const Eigen::MatrixXd& X) {
 }
 
 // Block permutation: contiguous blocks of r shuffled as units (keeps their autocorrelation).
-std::vector<double> block_permuted(const std::vector<double>& r, std::size_t block, std::mt19937_64& rng) {
+std::vector<double> block_permuted(const std::vector<double>& r, std::size_t block,
+                                   std::mt19937_64& rng) {
   std::vector<std::size_t> starts;
   for (std::size_t s = 0; s < r.size(); s += block) starts.push_back(s);
   std::shuffle(starts.begin(), starts.end(), rng);
@@ -83,13 +86,14 @@ struct Folds {
 };
 
 struct Baseline {
-  PreisachFitOptions options;         // L and lambda chosen once, then fixed
+  PreisachFitOptions options;          // L and lambda chosen once, then fixed
   std::vector<std::vector<double>> p;  // p[k][t]: prediction by the model fitted without fold k
   std::vector<double> oof;             // out-of-fold prediction
 };
 
-std::vector<double> fit_and_predict(std::span<const double> u, std::span<const double> y, const std::vector<int>& blocks,
-                                    PreisachFitOptions o, const std::vector<char>& exclude) {
+std::vector<double> fit_and_predict(std::span<const double> u, std::span<const double> y,
+                                    const std::vector<int>& blocks, PreisachFitOptions o,
+                                    const std::vector<char>& exclude) {
   o.exclude = exclude;
   const PreisachFit f = fit_preisach(u, y, blocks, o);
   PreisachState s = PreisachState::negative_saturation(f.model.grid());
@@ -99,13 +103,16 @@ std::vector<double> fit_and_predict(std::span<const double> u, std::span<const d
 
 }  // namespace
 
-Diagnosis diagnose(std::span<const double> time_in, std::span<const double> u, std::span<const double> y,
-                   std::span<const int> blocks, const DiagnoseOptions& opt) {
+Diagnosis diagnose(std::span<const double> time_in, std::span<const double> u,
+                   std::span<const double> y, std::span<const int> blocks,
+                   const DiagnoseOptions& opt) {
   const std::size_t n = u.size();
-  if (y.size() != n || (!time_in.empty() && time_in.size() != n) || (!blocks.empty() && blocks.size() != n)) {
+  if (y.size() != n || (!time_in.empty() && time_in.size() != n) ||
+      (!blocks.empty() && blocks.size() != n)) {
     throw_invalid("diagnose: sizes differ");
   }
-  if (n < 40) throw IdentificationError(fmt::format("{} samples are too few to diagnose (need >= 40)", n));
+  if (n < 40)
+    throw IdentificationError(fmt::format("{} samples are too few to diagnose (need >= 40)", n));
   const auto [ymin, ymax] = std::minmax_element(y.begin(), y.end());
   const double range = *ymax - *ymin;
   if (!(range > 0.0)) throw IdentificationError("the response never changes: nothing to diagnose");
@@ -113,24 +120,28 @@ Diagnosis diagnose(std::span<const double> time_in, std::span<const double> u, s
   if (time.empty()) {
     for (std::size_t t = 0; t < n; ++t) time.push_back(static_cast<double>(t));
   }
-  const double t0 = time.front(), t1 = time.back() > time.front() ? time.back() : time.front() + 1.0;
+  const double t0 = time.front(),
+               t1 = time.back() > time.front() ? time.back() : time.front() + 1.0;
 
   // Folds: whole cycles (or the given segments), as in the identification's cross-validation.
   Folds folds;
-  folds.of = blocks.empty() ? cycle_blocks(u, opt.folds) : std::vector<int>(blocks.begin(), blocks.end());
+  folds.of =
+      blocks.empty() ? cycle_blocks(u, opt.folds) : std::vector<int>(blocks.begin(), blocks.end());
   {
     std::vector<int> ids(folds.of);
     std::sort(ids.begin(), ids.end());
     ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
-    for (int& f : folds.of) f = static_cast<int>(std::lower_bound(ids.begin(), ids.end(), f) - ids.begin());
+    for (int& f : folds.of)
+      f = static_cast<int>(std::lower_bound(ids.begin(), ids.end(), f) - ids.begin());
     folds.count = static_cast<int>(ids.size());
   }
-  if (folds.count < 2) throw IdentificationError("diagnose needs at least two cycles or segments to hold out");
+  if (folds.count < 2)
+    throw IdentificationError("diagnose needs at least two cycles or segments to hold out");
 
   // Baseline: L and lambda by cross-validation once, then fixed for the per-fold fits.
   Baseline base;
   {
-    const PreisachFit full = fit_preisach(u, y, {}, PreisachFitOptions{});
+    const PreisachFit full = fit_preisach(u, y, {}, opt.baseline);
     base.options.levels = full.summary.levels;
     base.options.smoothness = full.summary.smoothness;
     base.options.grid_shifts = full.summary.grid_shifts;
@@ -172,7 +183,8 @@ Diagnosis diagnose(std::span<const double> time_in, std::span<const double> u, s
   // and the held-out gain of the two-stage extension y = p_k + X beta_k (beta_k on fold k's
   // training rows).
   auto feature_finding = [&](const std::string& effect, const std::string& extension,
-                             const std::function<Eigen::MatrixXd(const std::vector<double>& p)>& features,
+                             const std::function<Eigen::MatrixXd(const std::vector<double>& p)>&
+                                 features,
                              const std::string& what) {
     Finding f;
     f.effect = effect;
@@ -181,13 +193,15 @@ Diagnosis diagnose(std::span<const double> time_in, std::span<const double> u, s
     const Eigen::MatrixXd X = features(base.oof);
     f.score = r_squared(r, X);
     int exceed = 0;
-    for (int i = 0; i < opt.permutations; ++i) exceed += r_squared(block_permuted(r, block, rng), X) >= f.score ? 1 : 0;
+    for (int i = 0; i < opt.permutations; ++i)
+      exceed += r_squared(block_permuted(r, block, rng), X) >= f.score ? 1 : 0;
     f.p_value = (1.0 + exceed) / (1.0 + opt.permutations);
     double ss_after = 0.0;
     for (int k = 0; k < folds.count; ++k) {
       const Eigen::MatrixXd Xk = features(base.p[k]);
       std::vector<Eigen::Index> train, test;
-      for (std::size_t t = 0; t < n; ++t) (folds.of[t] == k ? test : train).push_back(static_cast<Eigen::Index>(t));
+      for (std::size_t t = 0; t < n; ++t)
+        (folds.of[t] == k ? test : train).push_back(static_cast<Eigen::Index>(t));
       Eigen::MatrixXd A(static_cast<Eigen::Index>(train.size()), Xk.cols() + 1);
       Eigen::VectorXd b(static_cast<Eigen::Index>(train.size()));
       for (std::size_t i = 0; i < train.size(); ++i) {
@@ -195,7 +209,18 @@ Diagnosis diagnose(std::span<const double> time_in, std::span<const double> u, s
         A.row(static_cast<Eigen::Index>(i)).tail(Xk.cols()) = Xk.row(train[i]);
         b[static_cast<Eigen::Index>(i)] = y[train[i]] - base.p[k][train[i]];
       }
-      const Eigen::VectorXd beta = A.colPivHouseholderQr().solve(b);
+      // Features that do not vary on the training rows carry no information there (e.g. the
+      // running maximum after the first rise): they get no coefficient.
+      for (Eigen::Index c = 1; c < A.cols(); ++c) {
+        const double mean = A.col(c).mean();
+        if ((A.col(c).array() - mean).abs().maxCoeff() < 1e-9) A.col(c).setZero();
+      }
+      Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+      qr.setThreshold(1e-10);
+      Eigen::VectorXd beta = qr.solve(b);
+      for (Eigen::Index c = 1; c < A.cols(); ++c) {
+        if (A.col(c).isZero()) beta[c] = 0.0;
+      }
       for (Eigen::Index t : test) {
         const double pred = base.p[k][t] + beta[0] + Xk.row(t).dot(beta.tail(Xk.cols()));
         ss_after += (y[t] - pred) * (y[t] - pred);
@@ -205,9 +230,10 @@ Diagnosis diagnose(std::span<const double> time_in, std::span<const double> u, s
     f.heldout_rms_after = 100.0 * std::sqrt(ss_after / static_cast<double>(n)) / range;
     f.gain_pct = 100.0 * (1.0 - f.heldout_rms_after / f.heldout_rms_before);
     f.detected = f.p_value < opt.alpha && f.gain_pct >= opt.min_gain_pct;
-    f.evidence = fmt::format("{} explains {:.0f} % of the held-out residual variance (block-permutation p = {:.3f}); "
-                             "the extension changes held-out E_RMS from {:.3f} to {:.3f} % of range",
-                             what, 100.0 * f.score, f.p_value, f.heldout_rms_before, f.heldout_rms_after);
+    f.evidence = fmt::format(
+        "{} explains {:.0f} % of the held-out residual variance (block-permutation p = {:.3f}); "
+        "the extension changes held-out E_RMS from {:.3f} to {:.3f} % of range",
+        what, 100.0 * f.score, f.p_value, f.heldout_rms_before, f.heldout_rms_after);
     return f;
   };
 
@@ -216,7 +242,8 @@ Diagnosis diagnose(std::span<const double> time_in, std::span<const double> u, s
       "drift", "preisach + linear trend in time",
       [&](const std::vector<double>&) {
         Eigen::MatrixXd X(static_cast<Eigen::Index>(n), 1);
-        for (std::size_t t = 0; t < n; ++t) X(static_cast<Eigen::Index>(t), 0) = (time[t] - t0) / (t1 - t0);
+        for (std::size_t t = 0; t < n; ++t)
+          X(static_cast<Eigen::Index>(t), 0) = (time[t] - t0) / (t1 - t0);
         return X;
       },
       "a linear trend in time"));
@@ -254,15 +281,27 @@ Diagnosis diagnose(std::span<const double> time_in, std::span<const double> u, s
     f.effect = "outliers";
     f.tested = true;
     f.extended_model = "preisach refitted without the flagged readings (robust fit)";
-    const double med = median(r);
-    const double scale = std::max({mad(r), floor, 1e-300});
+    // Isolated spikes: a reading far from both neighbours' mean, measured against the robust
+    // scale of that same quantity (structured residuals, smooth in time, do not produce them).
+    std::vector<double> spike(n, 0.0);
+    for (std::size_t t = 0; t < n; ++t) {
+      const double left = t > 0 ? r[t - 1] : r[t + 1], right = t + 1 < n ? r[t + 1] : r[t - 1];
+      spike[t] = r[t] - 0.5 * (left + right);
+    }
+    const double med = median(spike);
+    const double scale = std::max({mad(spike), floor, 1e-300});
     std::vector<char> flagged(n, 0);
     int count = 0;
     double zmax = 0.0;
+    const double r_med = median(r), r_scale = std::max({mad(r), floor, 1e-300});
     for (std::size_t t = 0; t < n; ++t) {
-      const double z = std::abs(r[t] - med) / scale;
-      zmax = std::max(zmax, z);
-      if (z > 8.0) {
+      // Input reversals are left out: the model's error may legitimately kink there.
+      const bool reversal = t > 0 && t + 1 < n && (u[t] - u[t - 1]) * (u[t + 1] - u[t]) <= 0.0;
+      if (reversal) continue;
+      const double z = std::abs(spike[t] - med) / scale;
+      const double level = std::abs(r[t] - r_med) / r_scale;
+      zmax = std::max(zmax, std::min(z, 1.6 * level));
+      if (z > 8.0 && level > 5.0) {
         flagged[t] = 1;
         ++count;
       }
@@ -286,14 +325,19 @@ Diagnosis diagnose(std::span<const double> time_in, std::span<const double> u, s
       }
       f.heldout_rms_before = 100.0 * std::sqrt(before / std::max(inliers, 1)) / range;
       f.heldout_rms_after = 100.0 * std::sqrt(after / std::max(inliers, 1)) / range;
-      f.gain_pct = f.heldout_rms_before > 0.0 ? 100.0 * (1.0 - f.heldout_rms_after / f.heldout_rms_before) : 0.0;
+      f.gain_pct = f.heldout_rms_before > 0.0
+                       ? 100.0 * (1.0 - f.heldout_rms_after / f.heldout_rms_before)
+                       : 0.0;
     } else {
       f.heldout_rms_before = f.heldout_rms_after = d.rms_pct_range;
     }
-    f.detected = count > 0 && f.p_value < opt.alpha;
-    f.evidence = fmt::format("{} reading(s) lie more than 8 robust sigmas from the residual median (largest {:.1f}); "
-                             "without them the held-out E_RMS on the other readings goes from {:.3f} to {:.3f} % of range",
-                             count, zmax, f.heldout_rms_before, f.heldout_rms_after);
+    // Removing them must help, unless the spikes are unmistakable (> 20 robust sigmas).
+    f.detected = count > 0 && f.p_value < opt.alpha && (f.gain_pct > 1.0 || zmax > 20.0);
+    f.evidence = fmt::format(
+        "{} reading(s) stand more than 8 robust sigmas off their neighbours (largest {:.1f}); "
+        "without them the held-out E_RMS on the other readings goes from {:.3f} to {:.3f} % of "
+        "range",
+        count, zmax, f.heldout_rms_before, f.heldout_rms_after);
     d.findings.push_back(f);
   }
   for (const char* e : {"minor_loop_noncongruence", "load_shape_coupling", "offset_nonlinearity"}) {

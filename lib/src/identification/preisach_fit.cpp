@@ -321,7 +321,8 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
   }
   const std::vector<int> segment_of = block_of;  // for restarts: excluded rows keep their block
   if (!options.exclude.empty()) {
-    if (options.exclude.size() != n) throw_invalid("Preisach fit: exclude mask needs one entry per sample");
+    if (options.exclude.size() != n)
+      throw_invalid("Preisach fit: exclude mask needs one entry per sample");
     for (std::size_t t = 0; t < n; ++t) {
       if (options.exclude[t]) block_of[t] = -1;  // in the memory, not in the least squares
     }

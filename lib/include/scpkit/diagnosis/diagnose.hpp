@@ -25,19 +25,21 @@
 #include <string>
 #include <vector>
 
+#include "scpkit/identification/preisach_fit.hpp"
+
 namespace scpkit {
 
 struct Finding {
   std::string effect;
-  bool tested = false;     ///< false when this data cannot test the effect
+  bool tested = false;  ///< false when this data cannot test the effect
   bool detected = false;
-  double score = 0.0;      ///< the signature statistic (effect-specific, larger = stronger)
-  double p_value = 1.0;    ///< against the block-permutation null
-  std::string evidence;    ///< one sentence
+  double score = 0.0;    ///< the signature statistic (effect-specific, larger = stronger)
+  double p_value = 1.0;  ///< against the block-permutation null
+  std::string evidence;  ///< one sentence
   std::string extended_model;
   double heldout_rms_before = 0.0;  ///< % of output range
   double heldout_rms_after = 0.0;
-  double gain_pct = 0.0;            ///< 100 (1 - after / before)
+  double gain_pct = 0.0;  ///< 100 (1 - after / before)
 };
 
 struct Diagnosis {
@@ -52,9 +54,11 @@ struct Diagnosis {
 struct DiagnoseOptions {
   int folds = 5;
   int permutations = 199;
-  double alpha = 0.01;       ///< significance level of each detector
-  double min_gain_pct = 5.0; ///< an extension must gain at least this on held-out data
+  double alpha = 0.01;        ///< significance level of each detector
+  double min_gain_pct = 5.0;  ///< an extension must gain at least this on held-out data
   std::uint64_t seed = 1;
+  /// How the baseline is identified: L and smoothness chosen by cross-validation unless set.
+  PreisachFitOptions baseline;
 };
 
 /// time_s may be empty (sample index used); blocks optional (segment ids).
