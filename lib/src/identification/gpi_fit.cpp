@@ -128,14 +128,7 @@ GpiFit fit_gpi(std::span<const double> input, std::span<const double> output,
   if (!(*vmax > *vmin)) throw IdentificationError("the input never changes: nothing to identify");
   if (!(*ymax > *ymin))
     throw IdentificationError("the response never changes: nothing to identify");
-  int sign = options.sign;
-  if (sign == 0) {
-    const double vm = std::accumulate(input.begin(), input.end(), 0.0) / static_cast<double>(n);
-    const double ym = std::accumulate(output.begin(), output.end(), 0.0) / static_cast<double>(n);
-    double cov = 0.0;
-    for (std::size_t t = 0; t < n; ++t) cov += (input[t] - vm) * (output[t] - ym);
-    sign = cov >= 0.0 ? 1 : -1;
-  }
+  const int sign = options.sign != 0 ? options.sign : response_direction(input, output);
 
   GpiModel base;
   base.v_min = *vmin;

@@ -33,14 +33,7 @@ LonelyFit fit_lonely(std::span<const double> input, std::span<const double> outp
   grid.lo = options.lo.value_or(*umin);
   grid.hi = options.hi.value_or(*umax);
   grid.validate();
-  int sign = options.sign;
-  if (sign == 0) {
-    const double um = std::accumulate(input.begin(), input.end(), 0.0) / static_cast<double>(n);
-    const double ym = std::accumulate(output.begin(), output.end(), 0.0) / static_cast<double>(n);
-    double cov = 0.0;
-    for (std::size_t t = 0; t < n; ++t) cov += (input[t] - um) * (output[t] - ym);
-    sign = cov >= 0.0 ? 1 : -1;
-  }
+  const int sign = options.sign != 0 ? options.sign : response_direction(input, output);
   // Regressor: cell signed areas, sigma * running-maximum columns, bias.
   const double h = grid.step();
   Eigen::MatrixXd A(static_cast<Eigen::Index>(n), p + L + 1);

@@ -227,4 +227,19 @@ NnlsResult solve_nnls(const Eigen::MatrixXd& G, const Eigen::VectorXd& f,
   return r;
 }
 
+int response_direction(std::span<const double> input, std::span<const double> output) {
+  const std::size_t n = std::min(input.size(), output.size());
+  if (n == 0) return 1;
+  double um = 0.0, ym = 0.0;
+  for (std::size_t t = 0; t < n; ++t) {
+    um += input[t];
+    ym += output[t];
+  }
+  um /= static_cast<double>(n);
+  ym /= static_cast<double>(n);
+  double cov = 0.0;
+  for (std::size_t t = 0; t < n; ++t) cov += (input[t] - um) * (output[t] - ym);
+  return cov >= 0.0 ? 1 : -1;
+}
+
 }  // namespace scpkit

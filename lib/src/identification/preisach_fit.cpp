@@ -297,14 +297,7 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
   base.hi = options.hi.value_or(*umax);
   if (!(base.lo < base.hi)) throw IdentificationError("input range is empty after lo/hi");
 
-  int sign = options.sign;
-  if (sign == 0) {
-    const double um = std::accumulate(input.begin(), input.end(), 0.0) / static_cast<double>(n);
-    const double ym = std::accumulate(output.begin(), output.end(), 0.0) / static_cast<double>(n);
-    double cov = 0.0;
-    for (std::size_t t = 0; t < n; ++t) cov += (input[t] - um) * (output[t] - ym);
-    sign = cov >= 0.0 ? 1 : -1;
-  }
+  const int sign = options.sign != 0 ? options.sign : response_direction(input, output);
 
   // Blocks: the given segment ids (renumbered) or whole-cycle blocks.
   std::vector<int> block_of(n);

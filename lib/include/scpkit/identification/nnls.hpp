@@ -11,6 +11,7 @@
 // iteration as a safety net, so the answer meets the KKT conditions to round-off:
 //   x_i >= 0, w_i = f_i - (G x)_i <= tol, x_i w_i = 0 (constrained); w_i = 0 (free).
 #include <Eigen/Core>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -42,5 +43,9 @@ NnlsResult solve_nnls(const Eigen::MatrixXd& G, const Eigen::VectorXd& f,
 /// below 1 means "optimal within tolerance").
 double kkt_violation(const Eigen::MatrixXd& G, const Eigen::VectorXd& f, const Eigen::VectorXd& x,
                      const std::vector<bool>& constrained, double relative_tolerance = 1e-11);
+
+/// +1 when the response rises with the input (non-negative covariance), -1 when it falls: the
+/// sign every identification constrains its densities or weights to when not told.
+int response_direction(std::span<const double> input, std::span<const double> output);
 
 }  // namespace scpkit
