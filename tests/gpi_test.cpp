@@ -12,22 +12,7 @@
 namespace scpkit {
 namespace {
 
-// Paper 000's identified envelopes and radii, with weights of one sign.
-GpiModel paper_model(std::mt19937& rng, double sign) {
-  GpiModel m;
-  m.right = {1.100, 0.048};
-  m.left = {1.236, 0.088};
-  std::uniform_real_distribution<double> U(0.01, 0.3);
-  for (int j = 0; j <= 10; ++j) {
-    m.radii.push_back(j / 10.0);
-    m.weights.push_back(sign * U(rng));
-  }
-  m.bias = 0.396;
-  m.v_min = 0.0;
-  m.v_max = 5.1;
-  m.validate();
-  return m;
-}
+GpiModel paper_model(std::mt19937& rng, double sign) { return testing::paper_gpi(rng, sign); }
 
 TEST(Gpi, StepIsThePaperCaseFormulaOfEq5) {
   std::mt19937 rng(71);

@@ -14,17 +14,7 @@ namespace scpkit {
 namespace {
 
 std::vector<HysteresisOperator> families(std::mt19937& rng) {
-  GpiModel g;
-  g.right = {1.1, 0.048};
-  g.left = {1.236, 0.088};
-  std::uniform_real_distribution<double> U(0.01, 0.3);
-  for (int j = 0; j <= 10; ++j) {
-    g.radii.push_back(j / 10.0);
-    g.weights.push_back(-U(rng));
-  }
-  g.bias = 0.396;
-  g.v_min = 0.0;
-  g.v_max = 5.1;
+  const GpiModel g = testing::paper_gpi(rng, -1.0);
   return {HysteresisOperator(testing::random_model(rng, PreisachGrid{0.0, 5.1, 10})),
           HysteresisOperator(g), HysteresisOperator(PolynomialModel{{0.008, -0.173}, 0.0, 5.1}),
           HysteresisOperator(PolynomialModel{{0.1, 0.5, -0.03}, 0.0, 5.1}),

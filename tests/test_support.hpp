@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "scpkit/hysteresis/gpi.hpp"
 #include "scpkit/hysteresis/preisach.hpp"
 
 #define EXPECT_THROW_MSG(statement, type, fragment)                                   \
@@ -30,6 +31,24 @@ inline PreisachModel random_model(std::mt19937& rng, PreisachGrid grid) {
   Eigen::VectorXd w(grid.cells());
   for (Eigen::Index k = 0; k < w.size(); ++k) w[k] = zero(rng) ? 0.0 : mass(rng);
   return PreisachModel(grid, w, std::uniform_real_distribution<double>(-1.0, 1.0)(rng));
+}
+
+/// Paper 000's identified GPI envelopes (aR 1.100, bR 0.048, aL 1.236, bL 0.088), radii j/10,
+/// random weights of one sign, on 0-5.1 V.
+inline GpiModel paper_gpi(std::mt19937& rng, double sign) {
+  GpiModel m;
+  m.right = {1.100, 0.048};
+  m.left = {1.236, 0.088};
+  std::uniform_real_distribution<double> U(0.01, 0.3);
+  for (int j = 0; j <= 10; ++j) {
+    m.radii.push_back(j / 10.0);
+    m.weights.push_back(sign * U(rng));
+  }
+  m.bias = 0.396;
+  m.v_min = 0.0;
+  m.v_max = 5.1;
+  m.validate();
+  return m;
 }
 
 /// A random input history inside [lo, hi] (sometimes beyond, to exercise clamping).
