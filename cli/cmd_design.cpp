@@ -1,6 +1,5 @@
 // scpkit design DESIGN.toml: one actuator design, predicted before it is made.
 #include <fmt/format.h>
-#include <toml++/toml.h>
 
 #include <iostream>
 #include <sstream>
@@ -36,74 +35,10 @@ int run_design(const std::vector<std::string>& args) {
   if (!parse_command_line(args, kUsage, kAbout, opt, {"DESIGN"}, vm)) return kOk;
   const std::filesystem::path path = vm["DESIGN"].as<std::string>();
 
-  // The design file: the sweep's vocabulary with one value each, loads in grams for this actuator.
-  toml::table root;
-  try {
-    root = toml::parse_file(path.string());
-  } catch (const toml::parse_error& e) {
-    throw InputError(path.string(), static_cast<int>(e.source().begin.line),
-                     static_cast<int>(e.source().begin.column), std::string(e.description()));
-  }
-  auto located = [&](const toml::node* n, const std::string& msg) -> InputError {
-    return n ? InputError(path.string(), static_cast<int>(n->source().begin.line),
-                          static_cast<int>(n->source().begin.column), msg)
-             : InputError(path.string(), 0, 0, msg);
-  };
-  for (const auto& [k, v] : root) {
-    const std::string key(k.str());
-    if (key != "thread_model" && key != "voltage_model" && key != "material" && key != "plies" &&
-        key != "coil" && key != "loads" && key != "protocol_file") {
-      throw located(&v, "unknown key '" + key + "'");
-    }
-  }
-  auto number = [&](const toml::table& t, const char* key, double fallback, bool required) {
-    const toml::node* n = t.get(key);
-    if (!n) {
-      if (required) throw located(&t, fmt::format("missing key '{}'", key));
-      return fallback;
-    }
-    const auto v = n->value<double>();
-    if (!v || !(*v >= 0.0)) throw located(n, fmt::format("'{}' must be a number >= 0", key));
-    return *v;
-  };
-  SweepSpec spec;
-  const auto model = root["thread_model"].value<std::string>();
-  if (!model) throw located(&root, "missing key 'thread_model'");
-  spec.thread_model = path.parent_path() / *model;
-  if (const auto v = root["voltage_model"].value<std::string>())
-    spec.voltage_model = path.parent_path() / *v;
-  spec.material = root["material"].value_or(std::string());
-  const SweepContext ctx = prepare_sweep(spec);
-
-  DesignSpec d;
-  d.plies = static_cast<int>(number(root, "plies", 0, true));
-  const toml::table* coil = root["coil"].as_table();
-  if (!coil) throw located(&root, "missing table [coil]");
-  const double dmm = number(*coil, "d_mm", 0.0, false);
-  d.coil.wire_d_m =
-      dmm > 0.0 ? dmm * 1e-3 : wire_diameter_for(ctx.material, ctx.characterisation, d.plies);
-  if (coil->get("D_mm")) {
-    d.coil.mean_D_m = number(*coil, "D_mm", 0.0, true) * 1e-3;
-  } else {
-    d.coil.mean_D_m = number(*coil, "spring_index", 0.0, true) * d.coil.wire_d_m;
-  }
-  d.coil.coils = number(*coil, "n", 0.0, true);
-  d.coil.legs = static_cast<int>(number(*coil, "legs", 2, false));
-  d.coil.length_m = number(*coil, "length_mm", 0.0, true) * 1e-3;
-  if (const toml::table* loads = root["loads"].as_table()) {
-    d.load_min_N = number(*loads, "min_g", 0.0, true) * kGram;
-    d.load_max_N = number(*loads, "max_g", 0.0, true) * kGram;
-    d.protocol_steps = static_cast<int>(number(*loads, "protocol_steps", 100, false));
-    d.working_load_N = number(*loads, "working_g", 0.0, false) * kGram;
-    d.target_stroke_mm = number(*loads, "target_stroke_mm", 0.0, false);
-  }
-  std::optional<Measurement> protocol;
-  if (const auto pf = root["protocol_file"].value<std::string>()) {
-    protocol = Measurement::read(path.parent_path() / *pf);
-    d.protocol_N = select_input(*protocol, "load").values;
-  } else if (!(d.load_max_N > 0.0)) {
-    throw located(&root, "give [loads] min_g and max_g, or a protocol_file");
-  }
+  DesignFile file = load_design_file(path);
+  const SweepContext& ctx = file.context;
+  const DesignSpec& d = file.design;
+  const std::optional<Measurement>& protocol = file.protocol;
 
   DesignWorkspace ws;
   const DesignResult r = evaluate_design(ctx.characterisation, ctx.material, d, ws, true);

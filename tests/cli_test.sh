@@ -127,6 +127,8 @@ check "design --help" 0 "usage: scpkit design" -- "$bin" design --help
 check "the characterised design reproduces its loop" 0 "against the protocol file's SCP strain: E_max [0-9.]+ %  E_RMS 0\.[0-9]+ %" -- "$bin" design "$src/examples/design/characterised-2ply.toml"
 check "bicep design with the voltage side" 0 "voltage for 8 mm: [0-9.]+ V" -- "$bin" design "$src/examples/design/bicep-design.toml" -o "$work/loop.csv"
 assert "design loop csv" grep -q "^load_g,predicted_scp_strain_pct$" "$work/loop.csv"
+printf 'thread_model = "%s"\nplies = 4\n[coil]\nn = 200\nlength_mm = 90\nspring_index = 2\nlegz = 2\n' "$(cd "$src" && pwd)/examples/design/thread-2ply.model.json" >"$work/typo-design.toml"
+check "design file typos are located" 3 "typo-design.toml:7:1: unknown key 'legz'" -- "$bin" design "$work/typo-design.toml"
 sweep=$src/examples/design/bicep-sweep.toml
 check "sweep needs -o" 2 "-o OUT.csv is required" -- "$bin" sweep "$sweep"
 check "sweep, 1 thread" 0 "2672 of 2672 candidates" -- "$bin" sweep "$sweep" -o "$work/s1.csv" --threads 1

@@ -256,6 +256,49 @@ SweepContext prepare_sweep(const SweepSpec& spec) {
   return ctx;
 }
 
+DesignFile load_design_file(const std::filesystem::path& path) {
+  using detail::TomlReader;
+  const toml::table root = TomlReader::parse(path);
+  const TomlReader r(path.string());
+  r.only_keys(root, {"thread_model", "voltage_model", "material", "plies", "coil", "loads",
+                     "protocol_file"});
+  const std::filesystem::path dir = path.parent_path();
+  SweepSpec spec;
+  spec.thread_model = dir / r.text(root, "thread_model", "", true);
+  if (root.get("voltage_model")) spec.voltage_model = dir / r.text(root, "voltage_model", "");
+  spec.material = r.text(root, "material", "");
+  DesignFile f{prepare_sweep(spec), {}, std::nullopt};
+  DesignSpec& d = f.design;
+  d.plies = static_cast<int>(r.integer(root, "plies", 0, 1, 100));
+  if (d.plies == 0) r.fail(&root, "missing key 'plies'");
+  const toml::table& coil = *r.table(root, "coil", true);
+  r.only_keys(coil, {"d_mm", "D_mm", "spring_index", "n", "legs", "length_mm"});
+  const double dmm = r.number(coil, "d_mm", 0.0, 0.0);
+  d.coil.wire_d_m =
+      dmm > 0.0 ? dmm * 1e-3
+                : wire_diameter_for(f.context.material, f.context.characterisation, d.plies);
+  d.coil.mean_D_m = coil.get("D_mm") ? r.positive(coil, "D_mm") * 1e-3
+                                     : r.positive(coil, "spring_index") * d.coil.wire_d_m;
+  d.coil.coils = r.positive(coil, "n");
+  d.coil.legs = static_cast<int>(r.integer(coil, "legs", 2, 1, 2));
+  d.coil.length_m = r.positive(coil, "length_mm") * 1e-3;
+  if (const toml::table* loads = r.table(root, "loads")) {
+    r.only_keys(*loads, {"min_g", "max_g", "protocol_steps", "working_g", "target_stroke_mm"});
+    d.load_min_N = r.number(*loads, "min_g", 0.0, 0.0, true) * kGram;
+    d.load_max_N = r.number(*loads, "max_g", 0.0, 0.0, true) * kGram;
+    d.protocol_steps = static_cast<int>(r.integer(*loads, "protocol_steps", 100, 2, 100000));
+    d.working_load_N = r.number(*loads, "working_g", 0.0, 0.0) * kGram;
+    d.target_stroke_mm = r.number(*loads, "target_stroke_mm", 0.0, 0.0);
+  }
+  if (root.get("protocol_file")) {
+    f.protocol = Measurement::read(dir / r.text(root, "protocol_file", ""));
+    d.protocol_N = select_input(*f.protocol, "load").values;
+  } else if (!(d.load_max_N > 0.0)) {
+    r.fail(&root, "give [loads] min_g and max_g, or a protocol_file");
+  }
+  return f;
+}
+
 DesignSpec sweep_candidate(const SweepContext& ctx, std::size_t index) {
   const SweepSpec& s = ctx.spec;
   DesignSpec d;

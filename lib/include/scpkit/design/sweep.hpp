@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "scpkit/design/design.hpp"
+#include "scpkit/io/measurement.hpp"
 
 namespace scpkit {
 
@@ -92,6 +93,15 @@ void rank_rows(std::vector<std::string>& rows, const std::string& objective, boo
 /// A whole output file: a comment line naming the sweep, the header, the ranked rows.
 std::string sweep_file(const SweepSpec& spec, const std::string& spec_name,
                        std::vector<std::string> rows, int shard = 0, int shards = 1);
+
+/// One design file (`scpkit design`, docs/design.md): the characterisation it names, the
+/// design, and the load protocol file when it gives one. InputError with line and column.
+struct DesignFile {
+  SweepContext context;
+  DesignSpec design;
+  std::optional<Measurement> protocol;
+};
+DesignFile load_design_file(const std::filesystem::path& path);
 
 /// Joins shard files into exactly the unsharded output. InputError when a shard is missing,
 /// repeated, from another sweep, or malformed.
