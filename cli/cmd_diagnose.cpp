@@ -17,8 +17,10 @@ constexpr const char* kAbout =
     "effect against a block-permutation null, fits the extension each effect implies and\n"
     "measures its gain on held-out data, and names the cause: the best-supported effect,\n"
     "`none` (residuals at the noise floor) or `unexplained` (structured, but no named effect).\n"
-    "This version tests drift, creep, lonely_stroke and outliers on single-input records\n"
-    "(docs/diagnose.md). --json prints the SPEC's object.";
+    "Load tests: Preisach baseline held out by cycles. Tests at several constant loads\n"
+    "(voltage, power or temperature input with a varying load column): augmented Preisach\n"
+    "baseline held out by load segment. Method and measured accuracy: docs/diagnose.md.\n"
+    "--json prints the SPEC's object.";
 
 }  // namespace
 
@@ -31,19 +33,23 @@ int run_diagnose(const std::vector<std::string>& args) {
   po::variables_map vm;
   if (!parse_command_line(args, kUsage, kAbout, opt, {"DATA"}, vm)) return kOk;
   const Measurement m = Measurement::read(vm["DATA"].as<std::string>());
-  const Signal in = select_input(m, vm["input"].as<std::string>());
+  const MeasurementColumn* drive = augmented_drive(m, vm["input"].as<std::string>());
+  const Signal in =
+      drive ? select_input(m, drive->name) : select_input(m, vm["input"].as<std::string>());
   const Signal out = select_response(m);
-  std::vector<double> time;
-  if (const MeasurementColumn* t = m.find(Quantity::kTime)) time = t->values;
-  std::vector<int> blocks;
+  DiagnoseData data;
+  data.input = in.values;
+  data.output = out.values;
+  if (const MeasurementColumn* t = m.find(Quantity::kTime)) data.time_s = t->values;
   if (const MeasurementColumn* seg = m.find(Quantity::kSegment)) {
-    for (double v : seg->values) blocks.push_back(static_cast<int>(v));
+    for (double v : seg->values) data.segments.push_back(static_cast<int>(v));
   }
+  if (drive) data.load_N = m.find(Quantity::kLoad)->values;
   DiagnoseOptions o;
   o.seed = static_cast<std::uint64_t>(std::max(0LL, vm["seed"].as<long long>()));
   const Diagnosis d = [&] {
     try {
-      return diagnose(time, in.values, out.values, blocks, o);
+      return diagnose(data, o);
     } catch (const IdentificationError& e) {
       rethrow_at_column(m, out.column, std::string("cannot diagnose: ") + e.what());
     }
@@ -65,6 +71,8 @@ int run_diagnose(const std::vector<std::string>& args) {
     print_json({{"input", in.column},
                 {"baseline",
                  {{"model", d.baseline_model},
+                  {"heldout_by", d.heldout_by},
+                  {"heldout_rows", d.heldout_rows},
                   {"rms_pct_range", d.rms_pct_range},
                   {"max_pct_range", d.max_pct_range}}},
                 {"noise_floor_pct_range", d.noise_floor_pct_range},
@@ -75,13 +83,23 @@ int run_diagnose(const std::vector<std::string>& args) {
   std::cout << fmt::format("{}: {} rows, input {}, response {}\n", m.source(), m.rows(), in.column,
                            out.column);
   std::cout << fmt::format(
-      "  baseline {} (held out by cycle): E_RMS {:.3f} %, E_max {:.3f} % of range; noise floor "
-      "{:.3f} %\n",
-      d.baseline_model, d.rms_pct_range, d.max_pct_range, d.noise_floor_pct_range);
+      "  baseline {}, held out by {} ({} readings scored): E_RMS {:.3f} %, E_max {:.3f} % of "
+      "range; noise floor {:.3f} %\n",
+      d.baseline_model, d.heldout_by, d.heldout_rows, d.rms_pct_range, d.max_pct_range,
+      d.noise_floor_pct_range);
   for (const Finding& f : d.findings) {
-    if (!f.tested) continue;
-    std::cout << fmt::format("  {:<14} {:<12} gain {:+6.1f} %  {}\n", f.effect,
+    if (!f.tested) {
+      std::cout << fmt::format("  {:<24} not tested: {}\n", f.effect, f.evidence);
+      continue;
+    }
+    std::cout << fmt::format("  {:<24} {:<12} gain {:+6.1f} %  {}\n", f.effect,
                              f.detected ? "DETECTED" : "not detected", f.gain_pct, f.evidence);
+  }
+  for (const Finding& f : d.findings) {
+    if (f.effect != d.cause) continue;
+    std::cout << fmt::format(
+        "  extended model: {} (held-out E_RMS {:.3f} -> {:.3f} %, gain {:.1f} %)\n",
+        f.extended_model, f.heldout_rms_before, f.heldout_rms_after, f.gain_pct);
   }
   std::cout << "  cause: " << d.cause << "\n";
   return kOk;

@@ -94,18 +94,8 @@ int run_fit(const std::vector<std::string>& args) {
   const Measurement m = Measurement::read(data_path);
   // Voltage (power, temperature) tests at several constant loads: the augmented model.
   const MeasurementColumn* load_col = m.find(Quantity::kLoad);
-  auto varies = [](const MeasurementColumn* c) {
-    if (!c) return false;
-    const auto [lo, hi] = std::minmax_element(c->values.begin(), c->values.end());
-    return *hi > *lo;
-  };
-  const MeasurementColumn* drive = nullptr;
-  for (Quantity q : {Quantity::kVoltage, Quantity::kPower, Quantity::kTemperature}) {
-    if (!drive && varies(m.find(q))) drive = m.find(q);
-  }
-  const std::string wanted_input = vm["input"].as<std::string>();
-  const bool augmented =
-      drive && varies(load_col) && wanted_input != "load" && wanted_input != load_col->name;
+  const MeasurementColumn* drive = augmented_drive(m, vm["input"].as<std::string>());
+  const bool augmented = drive != nullptr;
   const Signal in =
       augmented ? select_input(m, drive->name) : select_input(m, vm["input"].as<std::string>());
   const bool paired = m.find(Quantity::kThreadStrain) && m.find(Quantity::kScpStrain);

@@ -85,6 +85,20 @@ ResponseColumn find_response(const Measurement& m, const ModelFile& mf) {
   return r;
 }
 
+const MeasurementColumn* augmented_drive(const Measurement& m, const std::string& wanted_input) {
+  auto varies = [](const MeasurementColumn* c) {
+    if (!c) return false;
+    const auto [lo, hi] = std::minmax_element(c->values.begin(), c->values.end());
+    return *hi > *lo;
+  };
+  const MeasurementColumn* load = m.find(Quantity::kLoad);
+  if (!varies(load) || wanted_input == "load" || wanted_input == load->name) return nullptr;
+  for (Quantity q : {Quantity::kVoltage, Quantity::kPower, Quantity::kTemperature}) {
+    if (varies(m.find(q))) return m.find(q);
+  }
+  return nullptr;
+}
+
 ModelInputs model_inputs(const Measurement& m, const ModelFile& mf) {
   ModelInputs r{select_input(m, mf.input), {}, {}, {}};
   if (!mf.augmented) return r;

@@ -72,6 +72,10 @@ struct ModelInputs {
   std::vector<char> starts;    ///< empty unless augmented
   std::vector<std::string> warnings;
 };
+/// Tests at several constant loads: the drive column (voltage, power, temperature) that varies
+/// while the load also varies, unless the user asked for the load as input; else nullptr.
+const MeasurementColumn* augmented_drive(const Measurement& m, const std::string& wanted_input);
+
 ModelInputs model_inputs(const Measurement& m, const ModelFile& mf);
 
 /// IdentificationError -> InputError located at a column of the data file.

@@ -54,7 +54,8 @@ Eigen::MatrixXd smoothness_penalty(const PreisachGrid& grid) {
 
 Design make_design(const PreisachGrid& grid, int sign, std::span<const double> input,
                    std::span<const double> output, const std::vector<int>& block_of, int nblocks,
-                   bool with_rank, bool restart, const std::vector<int>& segment_of) {
+                   bool with_rank, bool restart, const std::vector<int>& segment_of,
+                   const std::function<void(Eigen::Ref<Eigen::VectorXd>)>& filter) {
   Design d;
   d.grid = grid;
   const auto n = static_cast<Eigen::Index>(input.size());
@@ -70,6 +71,9 @@ Design make_design(const PreisachGrid& grid, int sign, std::span<const double> i
     d.A.row(t).head(p) = row.transpose() * static_cast<double>(sign);
   }
   d.A.col(p).setOnes();
+  if (filter) {
+    for (Eigen::Index k = 0; k <= p; ++k) filter(d.A.col(k));
+  }
   for (int k = 0; k < p; ++k) {
     if (d.A.col(k).maxCoeff() - d.A.col(k).minCoeff() < 1e-9) ++d.unexcited;
   }
@@ -348,7 +352,8 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
     std::vector<Design> shifts;
     for (int k = 0; k < S; ++k) {
       shifts.push_back(make_design(shifted_grid(base, L, k, S), sign, input, output, block_of,
-                                   nblocks, with_rank && k == 0, restart, segment_of));
+                                   nblocks, with_rank && k == 0, restart, segment_of,
+                                   options.output_filter));
     }
     return shifts;
   };

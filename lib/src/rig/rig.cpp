@@ -36,6 +36,13 @@ void RigSpec::validate() const {
       throw_invalid("voltage truth must be gpi or preisach, got '{}'", v.truth);
     if (effects.minor_loop_noncongruence > 0.0)
       throw_invalid("minor_loop_noncongruence applies to load tests only");
+    if (!(v.dwell_spread >= 0.0) || !std::isfinite(v.dwell_spread))
+      throw_invalid("dwell_spread must be finite and >= 0");
+    if (effects.load_shape_coupling > 1.0) throw_invalid("load_shape_coupling must be <= 1");
+    if (effects.offset_nonlinearity > 0.9) throw_invalid("offset_nonlinearity must be <= 0.9");
+  } else if (effects.load_shape_coupling > 0.0 || effects.offset_nonlinearity > 0.0) {
+    throw_invalid(
+        "load_shape_coupling and offset_nonlinearity apply to voltage tests (several loads) only");
   }
   if (specimen != "thread" && specimen != "scp" && specimen != "pair") {
     throw_invalid("specimen must be thread, scp or pair, got '{}'", specimen);
@@ -49,8 +56,11 @@ void RigSpec::validate() const {
   if (p.cycles < 1 || p.steps_per_half < 1 || p.minor_loops < 0)
     throw_invalid("protocol counts must be positive");
   if (!(p.dwell_s > 0.0)) throw_invalid("dwell_s must be > 0");
+  if (!(p.dwell_spread >= 0.0) || !std::isfinite(p.dwell_spread))
+    throw_invalid("dwell_spread must be finite and >= 0");
   const RigEffects& e = effects;
-  for (double v : {e.creep, e.drift, e.lonely_stroke, e.outliers, e.minor_loop_noncongruence}) {
+  for (double v : {e.creep, e.drift, e.lonely_stroke, e.outliers, e.minor_loop_noncongruence,
+                   e.load_shape_coupling, e.offset_nonlinearity}) {
     if (!(v >= 0.0) || !std::isfinite(v))
       throw_invalid("effect magnitudes must be finite and >= 0");
   }
@@ -87,7 +97,8 @@ RigSpec load_rig_spec(const std::filesystem::path& path) {
   s.test = r.text(root, "test", s.test);
   s.specimen = r.text(root, "specimen", s.specimen);
   if (const toml::table* v = r.table(root, "voltage")) {
-    r.only_keys(*v, {"loads_g", "v_max", "cycles", "steps_per_half", "dwell_s", "truth"});
+    r.only_keys(
+        *v, {"loads_g", "v_max", "cycles", "steps_per_half", "dwell_s", "dwell_spread", "truth"});
     VoltageProtocol& q = s.voltage;
     if (const toml::node* n = v->get("loads_g")) {
       const toml::array* a = n->as_array();
@@ -104,6 +115,7 @@ RigSpec load_rig_spec(const std::filesystem::path& path) {
     q.steps_per_half =
         static_cast<int>(r.integer(*v, "steps_per_half", q.steps_per_half, 1, 10000));
     q.dwell_s = r.positive(*v, "dwell_s", q.dwell_s, false);
+    q.dwell_spread = r.number(*v, "dwell_spread", q.dwell_spread, 0.0);
     q.truth = r.text(*v, "truth", q.truth);
   }
   s.plies = static_cast<int>(r.integer(root, "plies", s.plies, 1, 100));
@@ -121,7 +133,7 @@ RigSpec load_rig_spec(const std::filesystem::path& path) {
   }
   if (const toml::table* p = r.table(root, "protocol")) {
     r.only_keys(*p, {"min_g", "max_g", "scale_with_plies", "cycles", "steps_per_half",
-                     "minor_loops", "dwell_s"});
+                     "minor_loops", "dwell_s", "dwell_spread"});
     LoadProtocol& q = s.protocol;
     q.min_g = r.number(*p, "min_g", q.min_g, 0.0);
     q.max_g = r.positive(*p, "max_g", q.max_g, false);
@@ -131,6 +143,7 @@ RigSpec load_rig_spec(const std::filesystem::path& path) {
         static_cast<int>(r.integer(*p, "steps_per_half", q.steps_per_half, 1, 10000));
     q.minor_loops = static_cast<int>(r.integer(*p, "minor_loops", q.minor_loops, 0, 10000));
     q.dwell_s = r.positive(*p, "dwell_s", q.dwell_s, false);
+    q.dwell_spread = r.number(*p, "dwell_spread", q.dwell_spread, 0.0);
   }
   if (const toml::table* p = r.table(root, "sensor")) {
     r.only_keys(*p, {"resolution_mm", "noise_mm"});
@@ -139,7 +152,7 @@ RigSpec load_rig_spec(const std::filesystem::path& path) {
   }
   if (const toml::table* p = r.table(root, "effects")) {
     r.only_keys(*p, {"creep", "creep_tau_s", "drift", "lonely_stroke", "outliers",
-                     "minor_loop_noncongruence"});
+                     "minor_loop_noncongruence", "load_shape_coupling", "offset_nonlinearity"});
     RigEffects& e = s.effects;
     e.creep = r.number(*p, "creep", 0.0, 0.0);
     e.creep_tau_s = r.positive(*p, "creep_tau_s", e.creep_tau_s, false);
@@ -147,6 +160,8 @@ RigSpec load_rig_spec(const std::filesystem::path& path) {
     e.lonely_stroke = r.number(*p, "lonely_stroke", 0.0, 0.0);
     e.outliers = r.number(*p, "outliers", 0.0, 0.0);
     e.minor_loop_noncongruence = r.number(*p, "minor_loop_noncongruence", 0.0, 0.0);
+    e.load_shape_coupling = r.number(*p, "load_shape_coupling", 0.0, 0.0);
+    e.offset_nonlinearity = r.number(*p, "offset_nonlinearity", 0.0, 0.0);
   }
   if (const toml::node* n = root.get("load_sequence_g")) {
     const toml::array* a = n->as_array();
@@ -266,10 +281,12 @@ RigRun run_rig(const RigSpec& spec, const Material& material) {
   const RigEffects& e = spec.effects;
 
   std::vector<double> material_strain(n), time_s(n);
+  const std::vector<double> dwell =
+      detail::dwell_times(n, spec.protocol.dwell_s, spec.protocol.dwell_spread, spec.seed);
   PreisachState state = PreisachState::negative_saturation(truth.grid());
   double viscous = 0.0, running_max = f_lo, t = 0.0;
   for (std::size_t k = 0; k < n; ++k) {
-    t += spec.protocol.dwell_s;
+    t += dwell[k];
     time_s[k] = t;
     const double f = loads_g[k] * kGram / spec.plies;
     double y;
@@ -288,7 +305,7 @@ RigRun run_rig(const RigSpec& spec, const Material& material) {
       y = truth.step(state, f);
     }
     if (e.creep > 0.0) {
-      viscous = y + (viscous - y) * std::exp(-spec.protocol.dwell_s / e.creep_tau_s);
+      viscous = y + (viscous - y) * std::exp(-dwell[k] / e.creep_tau_s);
       y = (1.0 - e.creep) * y + e.creep * viscous;
     }
     running_max = std::max(running_max, f);
@@ -317,10 +334,7 @@ RigRun run_rig(const RigSpec& spec, const Material& material) {
     run.metadata["truth_gain"] = fmt::format("{:.6g}", gain);
   }
   run.metadata["synthetic"] = fmt::format("scpkit virtual test rig, seed {}", spec.seed);
-  run.metadata["truth_effects"] = fmt::format(
-      "creep={:g} creep_tau_s={:g} drift={:g} lonely_stroke={:g} outliers={:g} "
-      "minor_loop_noncongruence={:g}",
-      e.creep, e.creep_tau_s, e.drift, e.lonely_stroke, e.outliers, e.minor_loop_noncongruence);
+  run.metadata["truth_effects"] = detail::effects_text(e);
   run.metadata["sensor"] =
       fmt::format("resolution {:g} mm, noise {:g} mm", spec.resolution_mm, spec.noise_mm);
 
@@ -335,7 +349,7 @@ RigRun run_rig(const RigSpec& spec, const Material& material) {
     run.columns = {"time_s", "dwell_s", "load_g", "disp_mm"};
   }
   for (std::size_t k = 0; k < n; ++k) {
-    std::vector<double> row{time_s[k], spec.protocol.dwell_s, loads_g[k]};
+    std::vector<double> row{time_s[k], dwell[k], loads_g[k]};
     if (spec.specimen == "pair") {
       row.push_back(thread[k]);
       row.push_back(scp[k]);

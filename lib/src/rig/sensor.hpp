@@ -2,13 +2,39 @@
 // Private to the rig: what happens between the specimen's strain and the file. Drift and
 // outliers (effects that belong to the measurement, scaled by the channel's range), then the
 // displacement sensor: Gaussian noise and quantisation to its resolution.
+#include <fmt/format.h>
+
 #include <cmath>
+#include <cstdint>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "scpkit/rig/rig.hpp"
 
 namespace scpkit::detail {
+
+/// Hold durations: constant, or log-uniform in [dwell / (1 + spread), dwell (1 + spread)] from
+/// a stream of their own (so a spread of 0 leaves every other draw of the rig unchanged).
+inline std::vector<double> dwell_times(std::size_t n, double dwell, double spread,
+                                       std::uint64_t seed) {
+  std::vector<double> d(n, dwell);
+  if (spread > 0.0) {
+    std::mt19937_64 rng(seed * 6364136223846793005ULL + 1442695040888963407ULL);
+    std::uniform_real_distribution<double> U(-1.0, 1.0);
+    for (double& x : d) x = dwell * std::exp(U(rng) * std::log1p(spread));
+  }
+  return d;
+}
+
+/// The truth_effects metadata line.
+inline std::string effects_text(const RigEffects& e) {
+  return fmt::format(
+      "creep={:g} creep_tau_s={:g} drift={:g} lonely_stroke={:g} outliers={:g} "
+      "minor_loop_noncongruence={:g} load_shape_coupling={:g} offset_nonlinearity={:g}",
+      e.creep, e.creep_tau_s, e.drift, e.lonely_stroke, e.outliers, e.minor_loop_noncongruence,
+      e.load_shape_coupling, e.offset_nonlinearity);
+}
 
 /// Strain-% readings of one channel. `range` is the channel's nominal strain range (fraction).
 inline std::vector<double> measure_channel(const std::vector<double>& strain,

@@ -41,12 +41,9 @@ std::vector<double> voltage_protocol(const VoltageProtocol& p) {
   return v;
 }
 
-}  // namespace
-
-VoltageTruth rig_voltage_truth(const RigSpec& spec) {
-  const double v_max = spec.voltage.v_max;
-  VoltageTruth t{HysteresisOperator(PolynomialModel{{0.0, 0.0}, 0.0, 1.0}), {}, {}};
-  if (spec.voltage.truth == "gpi") {
+// The two shapes of H the rig knows, normalised (first rise from 0 to v_max: 0 -> -1).
+HysteresisOperator voltage_h(const std::string& shape, double v_max) {
+  if (shape == "gpi") {
     GpiModel g;  // paper 000's identified envelopes, radii r_j = j / 10, falling weights
     g.right = {1.100, 0.048};
     g.left = {1.236, 0.088};
@@ -56,20 +53,25 @@ VoltageTruth rig_voltage_truth(const RigSpec& spec) {
     }
     g.v_min = 0.0;
     g.v_max = v_max;
-    t.h = normalised(HysteresisOperator(g), v_max);
-  } else {
-    const PreisachGrid grid{0.0, v_max, 30};  // a smooth falling density
-    Eigen::VectorXd w(grid.cells());
-    for (int i = 0; i < grid.levels; ++i) {
-      for (int j = i; j < grid.levels; ++j) {
-        const double b = (i + 0.5) / grid.levels, a = (j + 0.5) / grid.levels;
-        w[grid.cell_index(i, j)] =
-            -PreisachGrid::relative_area(i, j) *
-            std::exp(-std::pow((a - b - 0.1) / 0.12, 2) - std::pow((a + b - 1.1) / 0.6, 2));
-      }
-    }
-    t.h = normalised(HysteresisOperator(PreisachModel(grid, w, 0.0)), v_max);
+    return normalised(HysteresisOperator(g), v_max);
   }
+  const PreisachGrid grid{0.0, v_max, 30};  // a smooth falling density
+  Eigen::VectorXd w(grid.cells());
+  for (int i = 0; i < grid.levels; ++i) {
+    for (int j = i; j < grid.levels; ++j) {
+      const double b = (i + 0.5) / grid.levels, a = (j + 0.5) / grid.levels;
+      w[grid.cell_index(i, j)] =
+          -PreisachGrid::relative_area(i, j) *
+          std::exp(-std::pow((a - b - 0.1) / 0.12, 2) - std::pow((a + b - 1.1) / 0.6, 2));
+    }
+  }
+  return normalised(HysteresisOperator(PreisachModel(grid, w, 0.0)), v_max);
+}
+
+}  // namespace
+
+VoltageTruth rig_voltage_truth(const RigSpec& spec) {
+  VoltageTruth t{voltage_h(spec.voltage.truth, spec.voltage.v_max), {}, {}};
   // Paper 000 Eqs. 14-15 (F in mN, metres) as strain of a 70 mm actuator, F in N:
   // D(F) = 8.685e-3 F^2 - 2.935e-2 F + 0.045,  P(F) = -2.039e-3 F^2 + 5.527e-3 F - 0.005.
   const double L = 0.070, F0 = 0.294;
@@ -83,22 +85,35 @@ RigRun run_voltage_rig(const RigSpec& spec) {
   const VoltageTruth truth = rig_voltage_truth(spec);
   const VoltageProtocol& p = spec.voltage;
   const std::vector<double> v_one = voltage_protocol(p);
-  std::vector<double> time_s, load_g, volts, strain, segment;
+  const std::vector<double> dwell =
+      detail::dwell_times(v_one.size() * p.loads_g.size(), p.dwell_s, p.dwell_spread, spec.seed);
+  std::vector<double> time_s, load_g, volts, strain, segment, dwell_col;
   std::mt19937_64 rng(spec.seed);
   const RigEffects& e = spec.effects;
   double t = 0.0, viscous = 0.0;
   double range = 0.0;  // nominal strain range for drift and outliers: the largest f2
   for (double g : p.loads_g) range = std::max(range, std::abs(truth.f2(g * kGram)));
+  const auto [g_lo, g_hi] = std::minmax_element(p.loads_g.begin(), p.loads_g.end());
+  const double F_lo = *g_lo * kGram, dF = std::max((*g_hi - *g_lo) * kGram, 1e-9);
+  // Effects on the maps and on H's shape.
+  const std::vector<double> h2 =
+      voltage_h(p.truth == "gpi" ? "preisach" : "gpi", p.v_max).simulate(v_one);
+  auto knee = [&](double F) { return std::exp(-(F - F_lo) / (0.2 * dF)); };
   for (std::size_t k = 0; k < p.loads_g.size(); ++k) {
     const double F = p.loads_g[k] * kGram;
-    const std::vector<double> h = truth.h.simulate(v_one);  // each load from H's initial state
+    std::vector<double> h = truth.h.simulate(v_one);  // each load from H's initial state
+    const double w = e.load_shape_coupling * (F - F_lo) / dF;
+    for (std::size_t i = 0; i < h.size(); ++i) h[i] = (1.0 - w) * h[i] + w * h2[i];
+    const double f1 = truth.f1(F) + e.offset_nonlinearity * range * knee(F);
+    const double f2 = truth.f2(F) * (1.0 - e.offset_nonlinearity * knee(F));
     double running_max = 0.0;
     for (std::size_t i = 0; i < v_one.size(); ++i) {
-      t += p.dwell_s;
-      double y = truth.f2(F) * h[i] + truth.f1(F);
+      const double dt = dwell[k * v_one.size() + i];
+      t += dt;
+      double y = f2 * h[i] + f1;
       if (e.creep > 0.0) {
         if (i == 0) viscous = y;
-        viscous = y + (viscous - y) * std::exp(-p.dwell_s / e.creep_tau_s);
+        viscous = y + (viscous - y) * std::exp(-dt / e.creep_tau_s);
         y = (1.0 - e.creep) * y + e.creep * viscous;
       }
       // Lonely stroke, re-armed at every load change: the first rise differs from later
@@ -106,8 +121,9 @@ RigRun run_voltage_rig(const RigSpec& spec) {
       // open case), so the offset changes sign.
       running_max = std::max(running_max, v_one[i]);
       const double lonely_sign = k > 0 && p.loads_g[k] > p.loads_g[k - 1] ? -1.0 : 1.0;
-      y -= lonely_sign * e.lonely_stroke * truth.f2(F) * running_max / p.v_max;
+      y -= lonely_sign * e.lonely_stroke * f2 * running_max / p.v_max;
       time_s.push_back(t);
+      dwell_col.push_back(dt);
       load_g.push_back(p.loads_g[k]);
       volts.push_back(v_one[i]);
       strain.push_back(y);
@@ -128,15 +144,13 @@ RigRun run_voltage_rig(const RigSpec& spec) {
                                          truth.f1.c0, truth.f1.c1, truth.f1.c2);
   run.metadata["truth_f2"] = fmt::format("{:.6g} {:+.6g} F {:+.6g} F^2 (strain, F in N)",
                                          truth.f2.c0, truth.f2.c1, truth.f2.c2);
-  run.metadata["truth_effects"] =
-      fmt::format("creep={:g} creep_tau_s={:g} drift={:g} lonely_stroke={:g} outliers={:g}",
-                  e.creep, e.creep_tau_s, e.drift, e.lonely_stroke, e.outliers);
+  run.metadata["truth_effects"] = detail::effects_text(e);
   run.metadata["sensor"] =
       fmt::format("resolution {:g} mm, noise {:g} mm", spec.resolution_mm, spec.noise_mm);
   run.columns = {"time_s", "dwell_s", "segment", "load_g", "voltage_V", "disp_mm"};
   for (std::size_t i = 0; i < time_s.size(); ++i) {
-    run.rows.push_back(
-        {time_s[i], p.dwell_s, segment[i], load_g[i], volts[i], pct[i] * spec.length_mm / 100.0});
+    run.rows.push_back({time_s[i], dwell_col[i], segment[i], load_g[i], volts[i],
+                        pct[i] * spec.length_mm / 100.0});
   }
   return run;
 }

@@ -2,26 +2,25 @@
 // diagnose: what the rate-independent model gets wrong, the named cause, the extended model and
 // its gain on held-out data (SPEC.md "diagnose"; PHYSICS.md section 5).
 //
-// 1. Baseline: a Preisach model, identified with held-out validation: the record is cut into
-//    blocks of whole cycles (or the given segments); each block is predicted by a model fitted
-//    on the others (its memory driven by the whole input history). The out-of-fold residuals
-//    r_t are what the model gets wrong on data it has not seen.
-// 2. Noise floor: white noise from the first differences of the residuals
-//    (sigma = 1.4826 MAD(dr) / sqrt 2), plus the sensor's quantisation step q (q^2 / 12).
-// 3. One detector per effect: a signature statistic on r, tested against a block-permutation
-//    null (contiguous blocks of residuals shuffled, which keeps their autocorrelation), and the
-//    extension the effect implies, fitted on the training blocks and scored on the held-out
-//    block exactly as the baseline. An effect is detected when its statistic is significant
-//    and its extension gains on held-out data.
-// 4. cause: the detected effect with the largest held-out gain; "none" when nothing is detected
-//    and the baseline's held-out error is at the noise floor; "unexplained" when nothing is
-//    detected but the residuals are structured (well above the noise floor).
-//
-// This version covers single-input records (load or one drive input): drift, creep,
-// lonely_stroke and outliers. minor_loop_noncongruence, load_shape_coupling and
-// offset_nonlinearity (voltage tests at several loads) are reported as not tested.
+// 1. Baseline, identified with held-out validation (never random rows):
+//    - load tests: a Preisach operator on the load; held out by blocks of whole cycles (or the
+//      file's segments);
+//    - tests at several constant loads (voltage, power, temperature): the augmented model
+//      y = f1(F) + f2(F) H[v], H a Preisach operator; held out by load segment (each interior
+//      load in turn, predicted through the quadratic maps of the others).
+//    Each block is predicted by the model fitted without it, its memory driven by the whole
+//    input history. The out-of-fold residuals r_t are what the model gets wrong.
+// 2. Noise floor from the data: white noise from the residuals' first differences
+//    (1.4826 MAD / sqrt 2) and the sensor's quantisation step q (q^2 / 12).
+// 3. One detector per named effect: the extension the effect implies (PHYSICS.md section 5),
+//    fitted without each block and scored on it exactly as the baseline; detected when it
+//    gains >= min_gain_pct of held-out E_RMS and the gain is significant against random sign
+//    flips of per-block gains; effects defined by a residual signature must also pass a
+//    block-permutation test of that signature (blocks of residuals keep their autocorrelation).
+// 4. cause: outliers when detected, else the detected effect with the largest held-out gain;
+//    "none" when nothing is detected and the held-out error is within twice the noise floor;
+//    "unexplained" otherwise.
 #include <cstdint>
-#include <span>
 #include <string>
 #include <vector>
 
@@ -44,7 +43,9 @@ struct Finding {
 
 struct Diagnosis {
   std::string baseline_model = "preisach";
-  double rms_pct_range = 0.0;  ///< baseline, held-out
+  std::string heldout_by;        ///< "cycles", "segments" or "load segments"
+  std::size_t heldout_rows = 0;  ///< readings scored out of fold
+  double rms_pct_range = 0.0;    ///< baseline, held-out
   double max_pct_range = 0.0;
   double noise_floor_pct_range = 0.0;
   std::vector<Finding> findings;
@@ -61,9 +62,20 @@ struct DiagnoseOptions {
   PreisachFitOptions baseline;
 };
 
-/// time_s may be empty (sample index used); blocks optional (segment ids).
-Diagnosis diagnose(std::span<const double> time_s, std::span<const double> input,
-                   std::span<const double> output, std::span<const int> blocks,
-                   const DiagnoseOptions& options = {});
+/// What diagnose reads from a measurement.
+struct DiagnoseData {
+  std::vector<double> time_s;  ///< optional (reading index used when empty)
+  std::vector<double> input;   ///< load (load tests) or the drive (voltage, power, temperature)
+  std::vector<double> output;  ///< response
+  std::vector<double> load_N;  ///< tests at several constant loads: the load of each reading
+  std::vector<int> segments;   ///< optional segment ids
+};
+
+/// IdentificationError when the data cannot be diagnosed (too few readings, no excitation,
+/// nothing to hold out); InvalidArgument for inconsistent columns.
+Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& options = {});
+
+/// The effect names of SPEC.md, in the order diagnose reports them.
+const std::vector<std::string>& effect_names();
 
 }  // namespace scpkit

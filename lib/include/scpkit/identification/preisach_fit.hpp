@@ -15,6 +15,7 @@
 // the answer on where the grid lines fall relative to the input's turning points.
 // Departures from the papers: the smoothness term, the shifted-grid average and the
 // cross-validated choice of L and lambda, see docs/theory.md.
+#include <functional>
 #include <optional>
 #include <span>
 #include <string>
@@ -44,6 +45,11 @@ struct PreisachFitOptions {
   /// Rows to leave out of the least squares (non-zero entries) while their inputs still drive
   /// the memory: held-out validation on one record. Empty = use every row.
   std::vector<char> exclude;
+  /// A linear, causal filter applied to the model's output before it is compared with the data
+  /// (y = L[Gamma[u]]): applied to every regressor column, the weights stay a linear
+  /// least-squares problem. diagnose fits a Kelvin creep term this way. Empty = identity.
+  /// The returned model is Gamma; predictions are L applied to its output.
+  std::function<void(Eigen::Ref<Eigen::VectorXd>)> output_filter;
   NnlsOptions nnls;
 
   /// False (with the reason) for impossible settings.

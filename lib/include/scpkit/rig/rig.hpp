@@ -16,6 +16,10 @@
 //   lonely_stroke             running-maximum offset, fraction of the range (training)
 //   outliers                  spike size in strain ranges, on ~1 % of readings
 //   minor_loop_noncongruence  a of the moving Preisach model Gamma[u + a * range_u * y / range_y]
+//   load_shape_coupling       (voltage) h = (1 - w(F)) H[v] + w(F) H2[v], w = m (F - F_lo) / dF,
+//                             H2 a differently shaped operator normalised like H
+//   offset_nonlinearity       (voltage) knee k(F) = exp(-(F - F_lo) / (0.2 dF)) at low load:
+//                             f1 += m R k(F), f2 *= 1 - m k(F)  (R: the largest |f2|)
 // Voltage tests (test = "voltage"): y = f2(F) H[v] + f1(F) per constant-load segment, each from
 // H's initial state; lonely_stroke there is re-armed at every load change (paper 001).
 #include <cstdint>
@@ -40,6 +44,9 @@ struct LoadProtocol {
   int steps_per_half = 8;        ///< readings per half cycle
   int minor_loops = 3;           ///< random minor loops, each run twice, after the damped part
   double dwell_s = 180.0;        ///< hold before each reading (paper 002: 3 min)
+  /// 0: every hold lasts dwell_s. s > 0: each hold drawn log-uniformly in
+  /// [dwell_s / (1 + s), dwell_s (1 + s)] (protocols that vary the dwell expose creep).
+  double dwell_spread = 0.0;
 };
 
 /// Voltage tests at several constant loads (paper 000: 8 loads 294-980 mN, damped voltage
@@ -50,6 +57,7 @@ struct VoltageProtocol {
   int cycles = 2;          ///< damped oscillation cycles per load
   int steps_per_half = 9;  ///< readings per half cycle
   double dwell_s = 60.0;
+  double dwell_spread = 0.0;  ///< as LoadProtocol::dwell_spread
   std::string truth =
       "gpi";  ///< H of the truth: gpi (paper 000's identified envelopes) or preisach
 };
@@ -61,6 +69,8 @@ struct RigEffects {
   double lonely_stroke = 0.0;
   double outliers = 0.0;
   double minor_loop_noncongruence = 0.0;
+  double load_shape_coupling = 0.0;  ///< voltage tests: normalised loop shape changes with load
+  double offset_nonlinearity = 0.0;  ///< voltage tests: knee in f1, f2 at low load
 };
 
 struct RigSpec {

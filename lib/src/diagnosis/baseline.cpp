@@ -1,0 +1,296 @@
+#include "baseline.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/QR>
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include "scpkit/error.hpp"
+#include "scpkit/identification/augmented_fit.hpp"
+
+namespace scpkit::diagnosis {
+namespace {
+
+std::vector<int> dense_ids(std::vector<int> ids) {
+  std::vector<int> sorted(ids);
+  std::sort(sorted.begin(), sorted.end());
+  sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+  for (int& f : ids) {
+    if (f >= 0)
+      f = static_cast<int>(std::lower_bound(sorted.begin(), sorted.end(), f) - sorted.begin());
+  }
+  return ids;
+}
+
+// Least squares y ~ c0 + c1 x over the given rows; returns {c0, c1}.
+std::pair<double, double> line_fit(const std::vector<double>& x, const std::vector<double>& y) {
+  const auto n = static_cast<double>(x.size());
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    sx += x[i];
+    sy += y[i];
+    sxx += x[i] * x[i];
+    sxy += x[i] * y[i];
+  }
+  const double den = n * sxx - sx * sx;
+  if (!(std::abs(den) > 1e-300)) return {sy / std::max(n, 1.0), 0.0};
+  const double c1 = (n * sxy - sx * sy) / den;
+  return {(sy - c1 * sx) / n, c1};
+}
+
+}  // namespace
+
+Record make_record(const DiagnoseData& data, const DiagnoseOptions& opt) {
+  Record rec;
+  const std::size_t n = data.input.size();
+  if (data.output.size() != n || (!data.time_s.empty() && data.time_s.size() != n) ||
+      (!data.segments.empty() && data.segments.size() != n) ||
+      (!data.load_N.empty() && data.load_N.size() != n)) {
+    throw_invalid("diagnose: the columns have different lengths");
+  }
+  if (n < 40)
+    throw IdentificationError(fmt::format("{} readings are too few to diagnose (need >= 40)", n));
+  rec.u = data.input;
+  rec.y = data.output;
+  const auto [ymin, ymax] = std::minmax_element(rec.y.begin(), rec.y.end());
+  rec.range = *ymax - *ymin;
+  if (!(rec.range > 0.0))
+    throw IdentificationError("the response never changes: nothing to diagnose");
+  rec.time = data.time_s;
+  if (rec.time.empty()) {
+    for (std::size_t t = 0; t < n; ++t) rec.time.push_back(static_cast<double>(t));
+  }
+  std::set<double> loads(data.load_N.begin(), data.load_N.end());
+  rec.several_loads = loads.size() >= 2;
+  rec.seg.assign(n, 0);
+  if (rec.several_loads) {
+    for (const LoadSegment& s : split_load_segments(data.load_N, data.segments)) {
+      const int k = static_cast<int>(rec.seg_first.size());
+      rec.seg_first.push_back(s.first);
+      rec.seg_count.push_back(s.count);
+      rec.seg_load.push_back(s.load);
+      for (std::size_t t = s.first; t < s.first + s.count; ++t) rec.seg[t] = k;
+    }
+  } else {
+    rec.seg_first = {0};
+    rec.seg_count = {n};
+  }
+
+  rec.fold.assign(n, 0);
+  if (rec.several_loads && loads.size() >= 3) {
+    // Leave one load out: every segment strictly inside the load range in turn; the segments
+    // at the lowest and highest load stay in training (the maps interpolate, never extrapolate).
+    const double lo = *loads.begin(), hi = *loads.rbegin();
+    for (std::size_t t = 0; t < n; ++t) {
+      const double F = rec.seg_load[static_cast<std::size_t>(rec.seg[t])];
+      rec.fold[t] = F > lo && F < hi ? rec.seg[t] : -1;
+    }
+    rec.fold_kind = "load segments";
+  } else if (rec.several_loads && rec.seg_first.size() >= 3) {
+    // Two loads in three or more segments (e.g. 400 -> 200 -> 400 g): every segment whose
+    // load another segment shares is held out in turn.
+    for (std::size_t t = 0; t < n; ++t) {
+      const double F = rec.seg_load[static_cast<std::size_t>(rec.seg[t])];
+      const auto same = std::count(rec.seg_load.begin(), rec.seg_load.end(), F);
+      rec.fold[t] = same >= 2 ? rec.seg[t] : -1;
+    }
+    rec.fold_kind = "load segments";
+  } else if (rec.several_loads) {
+    // Two loads: the k-th block of whole cycles of every segment forms fold k.
+    for (std::size_t s = 0; s < rec.seg_first.size(); ++s) {
+      const std::span<const double> us(rec.u.data() + rec.seg_first[s], rec.seg_count[s]);
+      const std::vector<int> b = cycle_blocks(us, std::min(opt.folds, 3));
+      for (std::size_t i = 0; i < b.size(); ++i) rec.fold[rec.seg_first[s] + i] = b[i];
+    }
+    rec.fold_kind = "cycles";
+  } else if (!data.segments.empty()) {
+    rec.fold = data.segments;
+    rec.fold_kind = "segments";
+  } else {
+    rec.fold = cycle_blocks(rec.u, opt.folds);
+    rec.fold_kind = "cycles";
+  }
+  rec.fold = dense_ids(rec.fold);
+  rec.folds = 1 + *std::max_element(rec.fold.begin(), rec.fold.end());
+  if (rec.folds < 2 && !(rec.several_loads && rec.folds == 1)) {
+    throw IdentificationError(
+        "diagnose needs at least two cycles, segments or interior loads to hold out");
+  }
+  return rec;
+}
+
+double MapFit::eval(const std::vector<double>& c, double F) const {
+  const double x = (F - f_lo) / f_scale;
+  double v = 0.0;
+  for (std::size_t i = 0; i < std::min<std::size_t>(c.size(), 3); ++i) v += c[i] * std::pow(x, i);
+  if (c.size() > 3) v += c[3] * std::exp(-x / knee_width);
+  return v;
+}
+
+MapFit fit_maps(const std::vector<double>& F, const std::vector<double>& a,
+                const std::vector<double>& b, double knee_width, double f_lo, double f_scale) {
+  MapFit m;
+  m.f_lo = f_lo;
+  m.f_scale = f_scale > 0.0 ? f_scale : 1.0;
+  const std::set<double> distinct(F.begin(), F.end());
+  const int order = std::min<int>(3, static_cast<int>(distinct.size()));  // 1, 2 or 3 terms
+  const bool knee = knee_width > 0.0 && distinct.size() >= 4;
+  m.knee_width = knee ? knee_width : 0.0;
+  const auto rows = static_cast<Eigen::Index>(F.size());
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(rows, knee ? 4 : order);
+  for (Eigen::Index i = 0; i < rows; ++i) {
+    const double x = (F[static_cast<std::size_t>(i)] - f_lo) / m.f_scale;
+    for (int j = 0; j < order; ++j) A(i, j) = std::pow(x, j);
+    if (knee) A(i, 3) = std::exp(-x / knee_width);
+  }
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+  auto solve = [&](const std::vector<double>& v) {
+    const Eigen::VectorXd c = qr.solve(Eigen::Map<const Eigen::VectorXd>(v.data(), rows));
+    return std::vector<double>(c.data(), c.data() + c.size());
+  };
+  m.coef_a = solve(a);
+  m.coef_b = solve(b);
+  return m;
+}
+
+Baseline::Baseline(const Record& rec, const PreisachFitOptions& initial) : rec_(rec) {
+  const PreisachFit full = [&] {
+    if (!rec.several_loads) return fit_preisach(rec.u, rec.y, {}, initial);
+    // Normalised data from a first guess of each segment's offset and range (a line in v).
+    std::vector<double> hn(rec.size());
+    for (std::size_t s = 0; s < rec.seg_first.size(); ++s) {
+      const std::size_t f = rec.seg_first[s], c = rec.seg_count[s];
+      const std::vector<double> us(rec.u.begin() + static_cast<std::ptrdiff_t>(f),
+                                   rec.u.begin() + static_cast<std::ptrdiff_t>(f + c));
+      const std::vector<double> ys(rec.y.begin() + static_cast<std::ptrdiff_t>(f),
+                                   rec.y.begin() + static_cast<std::ptrdiff_t>(f + c));
+      const auto [a, b] = line_fit(us, ys);
+      for (std::size_t t = f; t < f + c; ++t) hn[t] = std::abs(b) > 0.0 ? (rec.y[t] - a) / b : 0.0;
+    }
+    PreisachFitOptions o = initial;
+    o.restart_at_blocks = true;
+    return fit_preisach(rec.u, hn, rec.seg, o);
+  }();
+  options_.restart_at_blocks = rec.several_loads;
+  options_.levels = full.summary.levels;
+  options_.smoothness = full.summary.smoothness;
+  options_.grid_shifts = full.summary.grid_shifts;
+  options_.sign = full.summary.sign;
+  options_.lo = full.input_min;
+  options_.hi = full.input_max;
+  options_.nnls = initial.nnls;
+}
+
+std::string Baseline::name() const {
+  return rec_.several_loads
+             ? fmt::format("augmented preisach (y = f1(F) + f2(F) H[v], quadratic maps, L = {})",
+                           options_.levels)
+             : fmt::format("preisach (L = {})", options_.levels);
+}
+
+PreisachModel Baseline::fit_operator(const std::vector<double>& u,
+                                     const std::vector<char>& train) const {
+  PreisachFitOptions o = options_;
+  const auto [lo, hi] = std::minmax_element(u.begin(), u.end());
+  o.lo = *lo;
+  o.hi = *hi;
+  o.exclude.resize(u.size());
+  for (std::size_t t = 0; t < u.size(); ++t) o.exclude[t] = train[t] ? 0 : 1;
+  return fit_preisach(u, rec_.y, {}, o).model;
+}
+
+FoldFit Baseline::fit(const std::vector<char>& train, const OutputFilter& filter) const {
+  const std::vector<double>& u = rec_.u;
+  const std::size_t n = rec_.size();
+  FoldFit out;
+  std::vector<char> exclude(n);
+  for (std::size_t t = 0; t < n; ++t) exclude[t] = train[t] ? 0 : 1;
+  auto simulate = [&](const PreisachModel& m) {
+    Eigen::VectorXd p(static_cast<Eigen::Index>(n));
+    for (std::size_t s = 0; s < rec_.seg_first.size(); ++s) {
+      PreisachState st = PreisachState::negative_saturation(m.grid());
+      for (std::size_t t = rec_.seg_first[s]; t < rec_.seg_first[s] + rec_.seg_count[s]; ++t)
+        p[static_cast<Eigen::Index>(t)] = m.step(st, u[t]);
+    }
+    if (filter) filter(p);
+    return std::vector<double>(p.data(), p.data() + p.size());
+  };
+  PreisachFitOptions o = options_;
+  o.output_filter = filter;
+  if (!rec_.several_loads) {
+    o.exclude = exclude;
+    out.pred = simulate(fit_preisach(u, rec_.y, {}, o).model);
+    return out;
+  }
+  const std::size_t S = rec_.seg_first.size();
+  out.a.assign(S, 0.0);
+  out.b.assign(S, 0.0);
+  out.free.assign(S, 0);
+  for (std::size_t s = 0; s < S; ++s) {
+    std::vector<double> us, ys;
+    for (std::size_t t = rec_.seg_first[s]; t < rec_.seg_first[s] + rec_.seg_count[s]; ++t) {
+      if (!train[t]) continue;
+      us.push_back(u[t]);
+      ys.push_back(rec_.y[t]);
+    }
+    if (us.size() < 3) continue;
+    const auto [a, b] = line_fit(us, ys);
+    if (!(std::abs(b) > 1e-12 * rec_.range)) continue;
+    out.a[s] = a;
+    out.b[s] = b;
+    out.free[s] = 1;
+  }
+  if (std::count(out.free.begin(), out.free.end(), 1) == 0)
+    throw IdentificationError("no segment has enough training readings");
+  for (int iteration = 0; iteration < 2; ++iteration) {
+    std::vector<double> hn(n, 0.0);
+    std::vector<char> ex(n, 1);
+    for (std::size_t t = 0; t < n; ++t) {
+      const auto s = static_cast<std::size_t>(rec_.seg[t]);
+      if (!train[t] || !out.free[s]) continue;
+      hn[t] = (rec_.y[t] - out.a[s]) / out.b[s];
+      ex[t] = 0;
+    }
+    o.exclude = ex;
+    out.h = simulate(fit_preisach(u, hn, rec_.seg, o).model);
+    for (std::size_t s = 0; s < S; ++s) {
+      if (!out.free[s]) continue;
+      std::vector<double> hs, ys;
+      for (std::size_t t = rec_.seg_first[s]; t < rec_.seg_first[s] + rec_.seg_count[s]; ++t) {
+        if (!train[t]) continue;
+        hs.push_back(out.h[t]);
+        ys.push_back(rec_.y[t]);
+      }
+      const auto [a, b] = line_fit(hs, ys);
+      if (std::abs(b) > 1e-12 * rec_.range) {
+        out.a[s] = a;
+        out.b[s] = b;
+      }
+    }
+  }
+  // Segments without training rows: the quadratic maps through the trained ones.
+  std::vector<double> F, A, B;
+  for (std::size_t s = 0; s < S; ++s) {
+    if (!out.free[s]) continue;
+    F.push_back(rec_.seg_load[s]);
+    A.push_back(out.a[s]);
+    B.push_back(out.b[s]);
+  }
+  const auto [flo, fhi] = std::minmax_element(rec_.seg_load.begin(), rec_.seg_load.end());
+  const MapFit maps = fit_maps(F, A, B, 0.0, *flo, *fhi - *flo);
+  for (std::size_t s = 0; s < S; ++s) {
+    if (out.free[s]) continue;
+    out.a[s] = maps.eval(maps.coef_a, rec_.seg_load[s]);
+    out.b[s] = maps.eval(maps.coef_b, rec_.seg_load[s]);
+  }
+  out.pred.resize(n);
+  for (std::size_t t = 0; t < n; ++t) {
+    const auto s = static_cast<std::size_t>(rec_.seg[t]);
+    out.pred[t] = out.a[s] + out.b[s] * out.h[t];
+  }
+  return out;
+}
+
+}  // namespace scpkit::diagnosis

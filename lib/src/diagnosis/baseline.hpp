@@ -1,0 +1,76 @@
+#pragma once
+// Private to diagnose: the record as diagnose sees it, its held-out folds, and the baseline
+// model refitted without each fold.
+//
+// Load tests: a Preisach operator on the load. Tests at several constant loads (voltage,
+// power, temperature): the augmented model y = a_s + b_s H[v] with H a Preisach operator
+// restarted in each segment, a_s and b_s free per segment where the segment has training
+// rows, and from quadratic maps f1(F), f2(F) through the trained segments where it has none
+// (paper 000's identification, refined by two alternations between H and the per-segment
+// affine maps).
+#include <Eigen/Core>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "scpkit/diagnosis/diagnose.hpp"
+#include "scpkit/identification/preisach_fit.hpp"
+
+namespace scpkit::diagnosis {
+
+struct Record {
+  std::vector<double> time, u, y;
+  bool several_loads = false;
+  std::vector<int> seg;  ///< segment of each row (0, 1, ...; one segment for load tests)
+  std::vector<std::size_t> seg_first, seg_count;
+  std::vector<double> seg_load;  ///< N (several_loads only)
+  std::vector<int> fold;         ///< held-out fold of each row; -1 = always in training
+  int folds = 0;
+  std::string fold_kind;  ///< "cycles" or "load segments"
+  double range = 1.0;     ///< output range
+  std::size_t size() const { return y.size(); }
+};
+
+/// Builds the record and its folds. IdentificationError when it cannot be diagnosed.
+Record make_record(const DiagnoseData& data, const DiagnoseOptions& options);
+
+/// Map families through the per-segment offsets and ranges (several loads).
+struct MapFit {
+  std::vector<double> coef_a, coef_b;  ///< on the basis below
+  double knee_width = 0.0;             ///< 0: quadratic; > 0: plus exp(-(F - F_lo) / width)
+  double f_lo = 0.0;
+  double f_scale = 1.0;  ///< basis in x = (F - f_lo) / f_scale
+  double eval(const std::vector<double>& c, double F) const;
+};
+MapFit fit_maps(const std::vector<double>& F, const std::vector<double>& a,
+                const std::vector<double>& b, double knee_width, double f_lo, double f_scale);
+
+/// One model fitted on the rows where train != 0, predicting every row.
+struct FoldFit {
+  std::vector<double> pred;
+  std::vector<double> h;     ///< several loads: H's output per row
+  std::vector<double> a, b;  ///< several loads: per segment, as used for the prediction
+  std::vector<char> free;    ///< several loads: the segment had training rows
+};
+
+/// A causal linear filter on the model's output (PreisachFitOptions::output_filter).
+using OutputFilter = std::function<void(Eigen::Ref<Eigen::VectorXd>)>;
+
+class Baseline {
+ public:
+  /// Chooses L and the smoothness once (cross-validation on the whole record), then fixes them.
+  Baseline(const Record& rec, const PreisachFitOptions& initial);
+  /// The model fitted on the rows where train != 0. With a filter, y = L[model] (creep).
+  FoldFit fit(const std::vector<char>& train, const OutputFilter& filter = {}) const;
+  /// Load tests: the Preisach operator fitted on `train` with the input replaced by u (the
+  /// moving Preisach extension fits on the shifted input).
+  PreisachModel fit_operator(const std::vector<double>& u, const std::vector<char>& train) const;
+  const PreisachFitOptions& options() const { return options_; }
+  std::string name() const;
+
+ private:
+  const Record& rec_;
+  PreisachFitOptions options_;
+};
+
+}  // namespace scpkit::diagnosis

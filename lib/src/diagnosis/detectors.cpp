@@ -1,0 +1,564 @@
+#include "detectors.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/QR>
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <set>
+
+#include "scpkit/hysteresis/preisach.hpp"
+#include "stats.hpp"
+
+namespace scpkit::diagnosis {
+namespace {
+
+struct Score {
+  double rms_after = 0.0;  // % of range
+  double gain_pct = 0.0;
+  double p_value = 1.0;
+};
+
+// Held-out comparison of an extension's out-of-fold prediction with the baseline's, on the
+// scored rows that `use` admits (all when empty).
+Score score(Context& ctx, const std::vector<double>& after, const std::vector<char>& use = {}) {
+  Score s;
+  double ss_before = 0.0, ss_after = 0.0;
+  std::size_t count = 0;
+  std::vector<double> gains;
+  for (const auto& block : ctx.blocks) {
+    double g = 0.0;
+    for (std::size_t t : block) {
+      if (!use.empty() && !use[t]) continue;
+      const double e = ctx.rec.y[t] - after[t];
+      ss_before += ctx.r[t] * ctx.r[t];
+      ss_after += e * e;
+      g += ctx.r[t] * ctx.r[t] - e * e;
+      ++count;
+    }
+    gains.push_back(g);
+  }
+  if (count == 0) return s;
+  const double before = std::sqrt(ss_before / static_cast<double>(count));
+  s.rms_after = 100.0 * std::sqrt(ss_after / static_cast<double>(count)) / ctx.rec.range;
+  s.gain_pct = before > 0.0 ? 100.0 * (1.0 - std::sqrt(ss_after / ss_before)) : 0.0;
+  s.p_value = sign_flip_p(gains, ctx.opt.permutations, ctx.rng);
+  return s;
+}
+
+// The segment's normalised load (F - mean F) / (F range) for each row.
+std::vector<double> centred_load(const Record& rec) {
+  const auto [lo, hi] = std::minmax_element(rec.seg_load.begin(), rec.seg_load.end());
+  const double mid = 0.5 * (*lo + *hi), span = std::max(*hi - *lo, 1e-300);
+  std::vector<double> x(rec.size());
+  for (std::size_t t = 0; t < rec.size(); ++t)
+    x[t] = (rec.seg_load[static_cast<std::size_t>(rec.seg[t])] - mid) / span;
+  return x;
+}
+
+void centre_per_segment(const Record& rec, Eigen::MatrixXd& X) {
+  for (std::size_t s = 0; s < rec.seg_first.size(); ++s) {
+    const auto f = static_cast<Eigen::Index>(rec.seg_first[s]);
+    const auto c = static_cast<Eigen::Index>(rec.seg_count[s]);
+    for (Eigen::Index j = 0; j < X.cols(); ++j) {
+      const double m = X.col(j).segment(f, c).mean();
+      X.col(j).segment(f, c).array() -= m;
+    }
+  }
+}
+
+}  // namespace
+
+Context::Context(const Record& record, const Baseline& b, const DiagnoseOptions& o)
+    : rec(record), base(b), opt(o), rng(o.seed) {
+  const std::size_t n = rec.size();
+  for (int k = 0; k < rec.folds; ++k) by_fold.push_back(base.fit(train_mask(k)));
+  oof.assign(n, 0.0);
+  r.assign(n, 0.0);
+  for (std::size_t t = 0; t < n; ++t) {
+    if (rec.fold[t] < 0) continue;
+    oof[t] = by_fold[static_cast<std::size_t>(rec.fold[t])].pred[t];
+    r[t] = rec.y[t] - oof[t];
+    scored.push_back(t);
+  }
+  // Blocks: runs of consecutive scored readings of one fold, cut to about 1/24 of the total.
+  const std::size_t len = std::max<std::size_t>(4, scored.size() / 24);
+  for (std::size_t i = 0; i < scored.size(); ++i) {
+    const std::size_t t = scored[i];
+    const bool cont = i > 0 && scored[i - 1] + 1 == t && rec.fold[t] == rec.fold[t - 1] &&
+                      blocks.back().size() < len;
+    if (!cont) blocks.emplace_back();
+    blocks.back().push_back(t);
+  }
+  std::vector<double> dr, rs;
+  for (std::size_t i = 0; i < scored.size(); ++i) {
+    const std::size_t t = scored[i];
+    rs.push_back(r[t]);
+    if (i > 0 && scored[i - 1] + 1 == t) dr.push_back(r[t] - r[t - 1]);
+  }
+  const double white = dr.size() >= 10 ? mad(dr) / std::sqrt(2.0) : mad(rs);
+  const double q = quantisation_step(rec.y);
+  floor = std::sqrt(white * white + q * q / 12.0);
+  rms_before = 100.0 * rms(rs) / rec.range;
+}
+
+std::vector<char> Context::train_mask(int fold) const {
+  std::vector<char> m(rec.size());
+  for (std::size_t t = 0; t < rec.size(); ++t) m[t] = rec.fold[t] != fold;
+  return m;
+}
+
+Finding not_tested(const Context& ctx, const std::string& effect, const std::string& why) {
+  Finding f;
+  f.effect = effect;
+  f.evidence = why;
+  f.heldout_rms_before = f.heldout_rms_after = ctx.rms_before;
+  return f;
+}
+
+Finding feature_finding(Context& ctx, const std::string& effect, const std::string& extension,
+                        const Features& features, const std::string& what) {
+  const Record& rec = ctx.rec;
+  Finding f;
+  f.effect = effect;
+  f.tested = true;
+  f.extended_model = extension;
+  std::vector<Eigen::MatrixXd> X;
+  for (const FoldFit& fit : ctx.by_fold) X.push_back(features(fit));
+  const Eigen::Index m = X.front().cols();
+  // Signature on the out-of-fold residuals.
+  Eigen::VectorXd rs(static_cast<Eigen::Index>(ctx.scored.size()));
+  Eigen::MatrixXd Xs(rs.size(), m);
+  for (std::size_t i = 0; i < ctx.scored.size(); ++i) {
+    const std::size_t t = ctx.scored[i];
+    rs[static_cast<Eigen::Index>(i)] = ctx.r[t];
+    Xs.row(static_cast<Eigen::Index>(i)) =
+        X[static_cast<std::size_t>(rec.fold[t])].row(static_cast<Eigen::Index>(t));
+  }
+  f.score = r_squared(rs, Xs);
+  const std::size_t block = std::max<std::size_t>(4, ctx.scored.size() / 24);
+  const double p_signature =
+      block_permutation_p(rs, Xs, f.score, block, ctx.opt.permutations, ctx.rng);
+  // The extension, fitted on each fold's training rows.
+  std::vector<double> after(ctx.oof);
+  for (int k = 0; k < rec.folds; ++k) {
+    const FoldFit& fit = ctx.by_fold[static_cast<std::size_t>(k)];
+    const Eigen::MatrixXd& Xk = X[static_cast<std::size_t>(k)];
+    std::vector<Eigen::Index> train;
+    for (std::size_t t = 0; t < rec.size(); ++t) {
+      if (rec.fold[t] != k) train.push_back(static_cast<Eigen::Index>(t));
+    }
+    Eigen::MatrixXd A(static_cast<Eigen::Index>(train.size()), m + 1);
+    Eigen::VectorXd b(A.rows());
+    for (Eigen::Index i = 0; i < A.rows(); ++i) {
+      const Eigen::Index t = train[static_cast<std::size_t>(i)];
+      A(i, 0) = 1.0;
+      A.row(i).tail(m) = Xk.row(t);
+      b[i] = rec.y[static_cast<std::size_t>(t)] - fit.pred[static_cast<std::size_t>(t)];
+    }
+    // A feature that does not vary on the training rows carries no information there.
+    std::vector<bool> dead(static_cast<std::size_t>(m + 1), false);
+    for (Eigen::Index c = 1; c <= m; ++c) {
+      const double mean = A.col(c).mean();
+      if ((A.col(c).array() - mean).abs().maxCoeff() < 1e-12) {
+        A.col(c).setZero();
+        dead[static_cast<std::size_t>(c)] = true;
+      }
+    }
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+    qr.setThreshold(1e-10);
+    Eigen::VectorXd beta = qr.solve(b);
+    for (Eigen::Index c = 1; c <= m; ++c) {
+      if (dead[static_cast<std::size_t>(c)]) beta[c] = 0.0;
+    }
+    for (std::size_t t = 0; t < rec.size(); ++t) {
+      if (rec.fold[t] != k) continue;
+      after[t] = fit.pred[t] + beta[0] + Xk.row(static_cast<Eigen::Index>(t)).dot(beta.tail(m));
+    }
+  }
+  const Score s = score(ctx, after);
+  f.p_value = std::max(p_signature, s.p_value);
+  f.heldout_rms_before = ctx.rms_before;
+  f.heldout_rms_after = s.rms_after;
+  f.gain_pct = s.gain_pct;
+  f.detected = f.p_value < ctx.opt.alpha && f.gain_pct >= ctx.opt.min_gain_pct;
+  f.evidence = fmt::format(
+      "{} explains {:.0f} % of the held-out residual variance (block-permutation p = {:.3f}); "
+      "the extension changes held-out E_RMS from {:.3f} to {:.3f} % of range (sign-flip p = "
+      "{:.3f})",
+      what, 100.0 * f.score, p_signature, f.heldout_rms_before, f.heldout_rms_after, s.p_value);
+  return f;
+}
+
+Finding model_finding(Context& ctx, const std::string& effect, const std::string& extension,
+                      const std::function<std::vector<double>(int fold)>& fold_prediction,
+                      const std::string& what) {
+  const Record& rec = ctx.rec;
+  Finding f;
+  f.effect = effect;
+  f.tested = true;
+  f.extended_model = extension;
+  std::vector<double> after(ctx.oof);
+  for (int k = 0; k < rec.folds; ++k) {
+    const std::vector<double> p = fold_prediction(k);
+    for (std::size_t t = 0; t < rec.size(); ++t) {
+      if (rec.fold[t] == k) after[t] = p[t];
+    }
+  }
+  const Score s = score(ctx, after);
+  f.p_value = s.p_value;
+  f.heldout_rms_before = ctx.rms_before;
+  f.heldout_rms_after = s.rms_after;
+  f.gain_pct = s.gain_pct;
+  f.score = f.gain_pct;
+  f.detected = f.p_value < ctx.opt.alpha && f.gain_pct >= ctx.opt.min_gain_pct;
+  f.evidence = fmt::format(
+      "{}: held-out E_RMS from {:.3f} to {:.3f} % of range (sign-flip p = {:.3f} over {} "
+      "blocks)",
+      what, f.heldout_rms_before, f.heldout_rms_after, s.p_value, ctx.blocks.size());
+  return f;
+}
+
+Finding detect_drift(Context& ctx) {
+  const Record& rec = ctx.rec;
+  const double t0 = rec.time.front(), t1 = std::max(rec.time.back(), t0 + 1e-300);
+  return feature_finding(
+      ctx, "drift", "baseline + linear trend in time",
+      [&](const FoldFit&) {
+        Eigen::MatrixXd X(static_cast<Eigen::Index>(rec.size()), 1);
+        for (std::size_t t = 0; t < rec.size(); ++t)
+          X(static_cast<Eigen::Index>(t), 0) = (rec.time[t] - t0) / (t1 - t0);
+        return X;
+      },
+      "a linear trend in time");
+}
+
+Finding detect_creep(Context& ctx) {
+  const Record& rec = ctx.rec;
+  std::vector<double> dt;
+  for (std::size_t t = 1; t < rec.size(); ++t) {
+    if (rec.time[t] > rec.time[t - 1]) dt.push_back(rec.time[t] - rec.time[t - 1]);
+  }
+  if (dt.empty()) return not_tested(ctx, "creep", "the readings carry no time");
+  const double step = median(dt);
+  // Kelvin element in the readings' own time: y = (1 - c) Gamma + c v, v relaxing towards
+  // Gamma with time constant tau (restarted at each segment). The model is fitted through the
+  // filter (weights stay linear); c and tau chosen on each fold's training rows.
+  struct Kelvin {
+    double c, tau;
+  };
+  std::vector<Kelvin> candidates;
+  for (double c : {0.15, 0.3, 0.5}) {
+    for (double tau : {0.5, 1.5, 4.0}) candidates.push_back({c, tau * step});
+  }
+  auto filter_for = [&rec](Kelvin k) {
+    return [&rec, k](Eigen::Ref<Eigen::VectorXd> p) {
+      double v = 0.0;
+      for (Eigen::Index t = 0; t < p.size(); ++t) {
+        const auto i = static_cast<std::size_t>(t);
+        const bool start = i == 0 || rec.seg[i] != rec.seg[i - 1];
+        const double decay =
+            start ? 0.0 : std::exp(-std::max(rec.time[i] - rec.time[i - 1], 0.0) / k.tau);
+        v = start ? p[t] : p[t] + (v - p[t]) * decay;
+        p[t] = (1.0 - k.c) * p[t] + k.c * v;
+      }
+    };
+  };
+  std::string chosen;
+  Finding f = model_finding(
+      ctx, "creep", "baseline through a Kelvin element (creep fraction c, time constant tau)",
+      [&](int k) {
+        const std::vector<char> train = ctx.train_mask(k);
+        std::vector<double> best_p = ctx.by_fold[static_cast<std::size_t>(k)].pred;
+        double best = std::numeric_limits<double>::infinity();
+        Kelvin best_k{0.0, 0.0};
+        for (const Kelvin& kv : candidates) {
+          const std::vector<double> p = ctx.base.fit(train, filter_for(kv)).pred;
+          double ss = 0.0;
+          for (std::size_t t = 0; t < rec.size(); ++t) {
+            if (train[t]) ss += (rec.y[t] - p[t]) * (rec.y[t] - p[t]);
+          }
+          if (ss < best) {
+            best = ss;
+            best_p = p;
+            best_k = kv;
+          }
+        }
+        chosen += fmt::format("{}c {:g}, tau {:.3g} s", chosen.empty() ? "" : "; ", best_k.c,
+                              best_k.tau);
+        return best_p;
+      },
+      "the response lags its rate-independent value with the readings' own timing");
+  f.extended_model += " (per fold: " + chosen + ")";
+  return f;
+}
+
+Finding detect_lonely_stroke(Context& ctx) {
+  const Record& rec = ctx.rec;
+  const auto [umin, umax] = std::minmax_element(rec.u.begin(), rec.u.end());
+  const double span = std::max(*umax - *umin, 1e-300);
+  if (!rec.several_loads) {
+    return feature_finding(
+        ctx, "lonely_stroke", "baseline + running-maximum term (expanded plane, paper 001)",
+        [&](const FoldFit&) {
+          Eigen::MatrixXd X(static_cast<Eigen::Index>(rec.size()), 1);
+          double M = rec.u.front();
+          for (std::size_t t = 0; t < rec.size(); ++t) {
+            M = std::max(M, rec.u[t]);
+            X(static_cast<Eigen::Index>(t), 0) = (M - *umin) / span;
+          }
+          return X;
+        },
+        "the running maximum of the input (first rise against later cycles)");
+  }
+  // Re-armed at every load change, scaled by the segment's range; one coefficient after load
+  // decreases (and the first segment), one after increases (paper 001: the sign may differ).
+  return feature_finding(
+      ctx, "lonely_stroke",
+      "augmented baseline + running-maximum term re-armed at each load change (paper 001)",
+      [&](const FoldFit& fit) {
+        Eigen::MatrixXd X = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(rec.size()), 2);
+        for (std::size_t s = 0; s < rec.seg_first.size(); ++s) {
+          const int col = s > 0 && rec.seg_load[s] > rec.seg_load[s - 1] ? 1 : 0;
+          double M = *umin;
+          for (std::size_t t = rec.seg_first[s]; t < rec.seg_first[s] + rec.seg_count[s]; ++t) {
+            M = std::max(M, rec.u[t]);
+            X(static_cast<Eigen::Index>(t), col) = fit.b[s] * (M - *umin) / span;
+          }
+        }
+        centre_per_segment(rec, X);
+        return X;
+      },
+      "the running maximum of the input since the last load change");
+}
+
+Finding detect_load_shape_coupling(Context& ctx) {
+  const Record& rec = ctx.rec;
+  if (!rec.several_loads)
+    return not_tested(ctx, "load_shape_coupling", "needs tests at several constant loads");
+  // A coarse Preisach operator G whose weight grows with the load:
+  // y = f1 + f2 (H[v] + (F - F_mid) / dF G[v]).
+  const auto [umin, umax] = std::minmax_element(rec.u.begin(), rec.u.end());
+  const PreisachGrid grid{*umin, *umax, 4};
+  Eigen::MatrixXd S(static_cast<Eigen::Index>(rec.size()), grid.cells());
+  {
+    Eigen::VectorXd row(grid.cells());
+    PreisachState st = PreisachState::negative_saturation(grid);
+    for (std::size_t t = 0; t < rec.size(); ++t) {
+      if (t == 0 || rec.seg[t] != rec.seg[t - 1]) st = PreisachState::negative_saturation(grid);
+      st.apply(rec.u[t]);
+      signed_area_fractions(grid, st, row);
+      S.row(static_cast<Eigen::Index>(t)) = row.transpose();
+    }
+  }
+  const std::vector<double> x = centred_load(rec);
+  return feature_finding(
+      ctx, "load_shape_coupling",
+      "augmented baseline + load-weighted second operator f2(F) (F - F_mid) G[v]",
+      [&](const FoldFit& fit) {
+        Eigen::MatrixXd X = S;
+        for (std::size_t t = 0; t < rec.size(); ++t)
+          X.row(static_cast<Eigen::Index>(t)) *= fit.b[static_cast<std::size_t>(rec.seg[t])] * x[t];
+        centre_per_segment(rec, X);
+        return X;
+      },
+      "a change of the normalised loop shape with load");
+}
+
+Finding detect_offset_nonlinearity(Context& ctx) {
+  const Record& rec = ctx.rec;
+  if (!rec.several_loads || rec.fold_kind != "load segments")
+    return not_tested(ctx, "offset_nonlinearity",
+                      "needs tests at three or more constant loads (held out by load)");
+  const std::set<double> distinct(rec.seg_load.begin(), rec.seg_load.end());
+  if (distinct.size() < 6)
+    return not_tested(ctx, "offset_nonlinearity",
+                      "needs six or more loads to fit and hold out a map beyond quadratic");
+  const auto [flo, fhi] = std::minmax_element(rec.seg_load.begin(), rec.seg_load.end());
+  const double f_lo = *flo, f_scale = *fhi - *flo;
+  const std::vector<double> widths = {0.0, 0.08, 0.15, 0.3};
+  return model_finding(
+      ctx, "offset_nonlinearity",
+      "augmented baseline with f1, f2 = quadratic + knee exp(-(F - F_lo) / w) at low load",
+      [&](int k) {
+        const FoldFit& fit = ctx.by_fold[static_cast<std::size_t>(k)];
+        std::vector<double> F, A, B;
+        for (std::size_t s = 0; s < rec.seg_first.size(); ++s) {
+          if (!fit.free[s]) continue;
+          F.push_back(rec.seg_load[s]);
+          A.push_back(fit.a[s]);
+          B.push_back(fit.b[s]);
+        }
+        // The knee width by leave-one-load-out over the training loads (0 = quadratic).
+        double best_w = 0.0, best = std::numeric_limits<double>::infinity();
+        for (double w : widths) {
+          double err = 0.0;
+          for (std::size_t i = 0; i < F.size(); ++i) {
+            if (F[i] == f_lo || F[i] == *fhi) continue;  // interpolation only
+            std::vector<double> Fi, Ai, Bi;
+            for (std::size_t j = 0; j < F.size(); ++j) {
+              if (j == i) continue;
+              Fi.push_back(F[j]);
+              Ai.push_back(A[j]);
+              Bi.push_back(B[j]);
+            }
+            const MapFit m = fit_maps(Fi, Ai, Bi, w, f_lo, f_scale);
+            err += std::pow(m.eval(m.coef_a, F[i]) - A[i], 2) +
+                   0.25 * std::pow(m.eval(m.coef_b, F[i]) - B[i], 2);
+          }
+          if (err < best * (1.0 - 1e-9)) {
+            best = err;
+            best_w = w;
+          }
+        }
+        const MapFit m = fit_maps(F, A, B, best_w, f_lo, f_scale);
+        std::vector<double> p(fit.pred);
+        for (std::size_t t = 0; t < rec.size(); ++t) {
+          const auto s = static_cast<std::size_t>(rec.seg[t]);
+          if (fit.free[s]) continue;
+          const double F_s = rec.seg_load[s];
+          p[t] = m.eval(m.coef_a, F_s) + m.eval(m.coef_b, F_s) * fit.h[t];
+        }
+        return p;
+      },
+      "maps with a low-load knee (width by leave-one-load-out) predict the held-out loads");
+}
+
+Finding detect_noncongruence(Context& ctx) {
+  const Record& rec = ctx.rec;
+  if (rec.several_loads) {
+    return not_tested(ctx, "minor_loop_noncongruence",
+                      "tested on load tests (one input); here the augmented maps absorb it");
+  }
+  const auto [umin, umax] = std::minmax_element(rec.u.begin(), rec.u.end());
+  const auto [ymin, ymax] = std::minmax_element(rec.y.begin(), rec.y.end());
+  const double gain = (*umax - *umin) / (*ymax - *ymin), y0 = *ymin;
+  const std::vector<double> shifts = {-0.3, -0.15, -0.05, 0.0, 0.05, 0.15, 0.3};
+  // The moving model's response: y_t = Gamma[u_t + a gain (y_t - y0)], a fixed point per step.
+  auto simulate = [&](const PreisachModel& m, double a) {
+    std::vector<double> y(rec.size());
+    PreisachState st = PreisachState::negative_saturation(m.grid());
+    double prev = m.output(st);
+    for (std::size_t t = 0; t < rec.size(); ++t) {
+      const PreisachState before = st;
+      double yt = prev;
+      for (int it = 0; it < 40; ++it) {
+        st = before;
+        const double next = m.step(st, rec.u[t] + a * gain * (yt - y0));
+        const bool done = std::abs(next - yt) < 1e-12 * rec.range;
+        yt = 0.5 * (yt + next);  // damped: converges for |a| gain slope < 3
+        if (done) break;
+      }
+      st = before;
+      yt = m.step(st, rec.u[t] + a * gain * (yt - y0));
+      y[t] = prev = yt;
+    }
+    return y;
+  };
+  return model_finding(
+      ctx, "minor_loop_noncongruence", "moving Preisach model Gamma[u + a y] (a chosen in-fold)",
+      [&](int k) {
+        const std::vector<char> train = ctx.train_mask(k);
+        std::vector<double> best_p = ctx.by_fold[static_cast<std::size_t>(k)].pred;
+        double best = std::numeric_limits<double>::infinity();
+        for (double a : shifts) {
+          std::vector<double> p;
+          if (a == 0.0) {
+            p = ctx.by_fold[static_cast<std::size_t>(k)].pred;
+          } else {
+            std::vector<double> ue(rec.size());
+            for (std::size_t t = 0; t < rec.size(); ++t)
+              ue[t] = rec.u[t] + a * gain * (rec.y[t] - y0);
+            p = simulate(ctx.base.fit_operator(ue, train), a);
+          }
+          double ss = 0.0;
+          for (std::size_t t = 0; t < rec.size(); ++t) {
+            if (train[t]) ss += (rec.y[t] - p[t]) * (rec.y[t] - p[t]);
+          }
+          if (ss < best) {
+            best = ss;
+            best_p = p;
+          }
+        }
+        return best_p;
+      },
+      "a moving Preisach model (the input shifted by the output: minor loops differ by history)");
+}
+
+Finding detect_outliers(Context& ctx) {
+  const Record& rec = ctx.rec;
+  const std::size_t n = rec.size();
+  Finding f;
+  f.effect = "outliers";
+  f.tested = true;
+  f.extended_model = "baseline refitted without the flagged readings (robust fit)";
+  // Isolated spikes: a reading far from its neighbours' mean, measured against the robust scale
+  // of that same quantity (structured residuals, smooth in time, do not produce them).
+  std::vector<double> spike, level;
+  for (std::size_t t : ctx.scored) {
+    const double left = t > 0 ? ctx.r[t - 1] : ctx.r[t + 1];
+    const double right = t + 1 < n ? ctx.r[t + 1] : ctx.r[t - 1];
+    spike.push_back(ctx.r[t] - 0.5 * (left + right));
+    level.push_back(ctx.r[t]);
+  }
+  const double med = median(spike), scale = std::max({mad(spike), ctx.floor, 1e-300});
+  const double r_med = median(level), r_scale = std::max({mad(level), ctx.floor, 1e-300});
+  std::vector<char> flagged(n, 0);
+  int count = 0;
+  double zmax = 0.0;
+  for (std::size_t i = 0; i < ctx.scored.size(); ++i) {
+    const std::size_t t = ctx.scored[i];
+    // Input reversals are left out: the model's error may legitimately kink there.
+    const bool reversal =
+        t > 0 && t + 1 < n && (rec.u[t] - rec.u[t - 1]) * (rec.u[t + 1] - rec.u[t]) <= 0.0;
+    const bool seg_edge =
+        (t > 0 && rec.seg[t] != rec.seg[t - 1]) || (t + 1 < n && rec.seg[t] != rec.seg[t + 1]);
+    if (reversal || seg_edge) continue;
+    const double z = std::abs(spike[i] - med) / scale;
+    const double lv = std::abs(level[i] - r_med) / r_scale;
+    zmax = std::max(zmax, std::min(z, 1.6 * lv));
+    if (z > 12.0 && lv > 6.0) {
+      flagged[t] = 1;
+      ++count;
+    }
+  }
+  f.score = zmax;
+  f.p_value = std::min(1.0, static_cast<double>(n) * std::erfc(zmax / std::sqrt(2.0)));
+  f.heldout_rms_before = f.heldout_rms_after = ctx.rms_before;
+  if (count > 0) {
+    std::vector<double> after(ctx.oof);
+    for (int k = 0; k < rec.folds; ++k) {
+      std::vector<char> train = ctx.train_mask(k);
+      for (std::size_t t = 0; t < n; ++t) train[t] = train[t] && !flagged[t];
+      const FoldFit fit = ctx.base.fit(train);
+      for (std::size_t t = 0; t < n; ++t) {
+        if (rec.fold[t] == k) after[t] = fit.pred[t];
+      }
+    }
+    std::vector<char> inliers(n);
+    for (std::size_t t = 0; t < n; ++t) inliers[t] = !flagged[t];
+    const Score s = score(ctx, after, inliers);
+    double ss = 0.0;
+    std::size_t m = 0;
+    for (std::size_t t : ctx.scored) {
+      if (flagged[t]) continue;
+      ss += ctx.r[t] * ctx.r[t];
+      ++m;
+    }
+    f.heldout_rms_before =
+        100.0 * std::sqrt(ss / static_cast<double>(std::max<std::size_t>(m, 1))) / rec.range;
+    f.heldout_rms_after = s.rms_after;
+    f.gain_pct = s.gain_pct;
+  }
+  // Removing them must help, unless the spikes are unmistakable (> 20 robust sigmas).
+  f.detected = count > 0 && f.p_value < ctx.opt.alpha && (f.gain_pct > 1.0 || zmax > 20.0);
+  f.evidence = fmt::format(
+      "{} reading(s) stand more than 12 robust sigmas off their neighbours (largest {:.1f}); "
+      "without them the held-out E_RMS on the other readings goes from {:.3f} to {:.3f} % of "
+      "range",
+      count, zmax, f.heldout_rms_before, f.heldout_rms_after);
+  return f;
+}
+
+}  // namespace scpkit::diagnosis

@@ -1,0 +1,55 @@
+#pragma once
+// Private to diagnose: what every detector shares (the record, the baseline refitted without
+// each fold, its out-of-fold residuals, the noise floor) and one function per named effect.
+#include <Eigen/Core>
+#include <functional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "baseline.hpp"
+#include "scpkit/diagnosis/diagnose.hpp"
+
+namespace scpkit::diagnosis {
+
+struct Context {
+  const Record& rec;
+  const Baseline& base;
+  const DiagnoseOptions& opt;
+  std::vector<FoldFit> by_fold;                  ///< the baseline fitted without fold k
+  std::vector<double> oof;                       ///< out-of-fold prediction (scored rows)
+  std::vector<double> r;                         ///< y - oof (0 on rows never held out)
+  std::vector<std::size_t> scored;               ///< rows held out in some fold
+  std::vector<std::vector<std::size_t>> blocks;  ///< consecutive scored rows, for the tests
+  double floor = 0.0;                            ///< noise sigma (output units)
+  double rms_before = 0.0;                       ///< % of range
+  std::mt19937_64 rng;
+
+  Context(const Record& r, const Baseline& b, const DiagnoseOptions& o);
+  std::vector<char> train_mask(int fold) const;
+};
+
+/// Features of an effect, one row per reading, computed from one fold's baseline fit.
+using Features = std::function<Eigen::MatrixXd(const FoldFit&)>;
+
+/// An effect seen as a residual signature X: block-permutation test of R^2(r ~ X), and the
+/// two-stage extension y = baseline + X beta (beta on each fold's training rows).
+Finding feature_finding(Context& ctx, const std::string& effect, const std::string& extension,
+                        const Features& features, const std::string& what);
+
+/// An effect whose extension is another model: `fit(train)` predicts every row.
+Finding model_finding(Context& ctx, const std::string& effect, const std::string& extension,
+                      const std::function<std::vector<double>(int fold)>& fold_prediction,
+                      const std::string& what);
+
+Finding not_tested(const Context& ctx, const std::string& effect, const std::string& why);
+
+Finding detect_drift(Context& ctx);
+Finding detect_creep(Context& ctx);
+Finding detect_lonely_stroke(Context& ctx);
+Finding detect_noncongruence(Context& ctx);
+Finding detect_load_shape_coupling(Context& ctx);
+Finding detect_offset_nonlinearity(Context& ctx);
+Finding detect_outliers(Context& ctx);
+
+}  // namespace scpkit::diagnosis

@@ -1,0 +1,107 @@
+#include "stats.hpp"
+
+#include <Eigen/QR>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace scpkit::diagnosis {
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+double mad(const std::vector<double>& v) {
+  const double m = median(v);
+  std::vector<double> d;
+  d.reserve(v.size());
+  for (double x : v) d.push_back(std::abs(x - m));
+  return 1.4826 * median(d);
+}
+
+double rms(std::span<const double> e) {
+  double s = 0.0;
+  for (double x : e) s += x * x;
+  return e.empty() ? 0.0 : std::sqrt(s / static_cast<double>(e.size()));
+}
+
+double quantisation_step(std::span<const double> y) {
+  std::vector<double> v(y.begin(), y.end());
+  std::sort(v.begin(), v.end());
+  v.erase(std::unique(v.begin(), v.end()), v.end());
+  if (v.size() < 3) return 0.0;
+  double q = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 1; i < v.size(); ++i) q = std::min(q, v[i] - v[i - 1]);
+  int whole = 0;
+  for (std::size_t i = 1; i < v.size(); ++i) {
+    const double k = (v[i] - v[i - 1]) / q;
+    whole += std::abs(k - std::round(k)) < 0.05 ? 1 : 0;
+  }
+  return whole >= 0.9 * static_cast<double>(v.size() - 1) ? q : 0.0;
+}
+
+double r_squared(const Eigen::VectorXd& r, const Eigen::MatrixXd& X) {
+  Eigen::MatrixXd A(r.size(), X.cols() + 1);
+  A.col(0).setOnes();
+  A.rightCols(X.cols()) = X;
+  const Eigen::VectorXd beta = A.colPivHouseholderQr().solve(r);
+  const double ss_res = (r - A * beta).squaredNorm();
+  const double ss_tot = (r.array() - r.mean()).square().sum();
+  return ss_tot > 0.0 ? std::max(0.0, 1.0 - ss_res / ss_tot) : 0.0;
+}
+
+double block_permutation_p(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, double r2,
+                           std::size_t block, int permutations, std::mt19937_64& rng) {
+  const auto n = static_cast<std::size_t>(r.size());
+  std::vector<std::size_t> starts;
+  for (std::size_t s = 0; s < n; s += block) starts.push_back(s);
+  // The projection onto [1, X] is computed once; each permutation costs one product.
+  Eigen::MatrixXd A(r.size(), X.cols() + 1);
+  A.col(0).setOnes();
+  A.rightCols(X.cols()) = X;
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+  int exceed = 0;
+  Eigen::VectorXd perm(r.size());
+  for (int i = 0; i < permutations; ++i) {
+    std::shuffle(starts.begin(), starts.end(), rng);
+    Eigen::Index k = 0;
+    for (std::size_t s : starts) {
+      for (std::size_t t = s; t < std::min(s + block, n); ++t)
+        perm[k++] = r[static_cast<Eigen::Index>(t)];
+    }
+    const double ss_res = (perm - A * qr.solve(perm)).squaredNorm();
+    const double ss_tot = (perm.array() - perm.mean()).square().sum();
+    const double stat = ss_tot > 0.0 ? 1.0 - ss_res / ss_tot : 0.0;
+    exceed += stat >= r2 ? 1 : 0;
+  }
+  return (1.0 + exceed) / (1.0 + permutations);
+}
+
+double sign_flip_p(const std::vector<double>& d, int permutations, std::mt19937_64& rng) {
+  double observed = 0.0;
+  for (double x : d) observed += x;
+  if (d.empty() || observed <= 0.0) return 1.0;
+  int exceed = 0, total = 0;
+  auto count = [&](std::uint64_t signs) {
+    double s = 0.0;
+    for (std::size_t b = 0; b < d.size(); ++b) s += (signs >> b & 1U) ? -d[b] : d[b];
+    exceed += s >= observed - 1e-12 * std::abs(observed) ? 1 : 0;
+    ++total;
+  };
+  if (d.size() <= 12) {
+    for (std::uint64_t m = 0; m < (std::uint64_t{1} << d.size()); ++m) count(m);
+    return static_cast<double>(exceed) / total;
+  }
+  std::uniform_int_distribution<std::uint64_t> bits;
+  for (int i = 0; i < permutations; ++i) {
+    double s = 0.0;
+    for (std::size_t b = 0; b < d.size(); ++b) s += (bits(rng) & 1U) ? -d[b] : d[b];
+    exceed += s >= observed - 1e-12 * std::abs(observed) ? 1 : 0;
+  }
+  return (1.0 + exceed) / (1.0 + permutations);
+}
+
+}  // namespace scpkit::diagnosis
