@@ -157,6 +157,9 @@ for f in d['findings']:
     assert set(['effect','detected','score','evidence','extended_model','heldout_rms_before','heldout_rms_after','gain_pct']) <= set(f), f" \
     < <("$bin" diagnose "$work/drift.csv" --json 2>/dev/null)
 fi
+# Voltage tests at several loads: the augmented baseline, held out by load segment; clean data.
+check "diagnose voltage tests (clean) names none" 0 '"cause": "none"' -- "$bin" diagnose "$src/examples/data/voltage-8loads.csv" --json
+check "diagnose voltage tests: augmented baseline by load segment" 0 "held out by load segments" -- "$bin" diagnose "$src/examples/data/voltage-8loads.csv"
 
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -22,14 +22,20 @@ int main(int argc, char** argv) {
   bool verbose = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--cases" && i + 1 < argc) cases = std::atoi(argv[++i]);
-    else if (a == "--offset" && i + 1 < argc) offset = std::atoi(argv[++i]);
-    else if (a == "--out" && i + 1 < argc) out = argv[++i];
-    else if (a == "--side" && i + 1 < argc) only_side = argv[++i];
-    else if (a == "-v") verbose = true;
+    if (a == "--cases" && i + 1 < argc)
+      cases = std::atoi(argv[++i]);
+    else if (a == "--offset" && i + 1 < argc)
+      offset = std::atoi(argv[++i]);
+    else if (a == "--out" && i + 1 < argc)
+      out = argv[++i];
+    else if (a == "--side" && i + 1 < argc)
+      only_side = argv[++i];
+    else if (a == "-v")
+      verbose = true;
     else if (a == "--show" && i + 3 < argc) {
       // One scenario in detail: --show SIDE EFFECT INDEX.
-      const testing::Scenario s = testing::make_scenario(argv[i + 1], argv[i + 2], std::atoi(argv[i + 3]));
+      const testing::Scenario s =
+          testing::make_scenario(argv[i + 1], argv[i + 2], std::atoi(argv[i + 3]));
       const Diagnosis d = testing::diagnose_scenario(s);
       std::cout << s.describe() << ": baseline " << d.baseline_model << " rms " << d.rms_pct_range
                 << " floor " << d.noise_floor_pct_range << " -> " << d.cause << "\n";
@@ -37,8 +43,7 @@ int main(int argc, char** argv) {
         std::cout << fmt::format("  {:<26} {} {} p {:.3g} gain {:+.1f}: {}\n", f.effect, f.tested,
                                  f.detected, f.p_value, f.gain_pct, f.evidence);
       return 0;
-    }
-    else {
+    } else {
       std::cerr << "usage: diagnose_confusion [--cases N] [--offset K] [--side load|voltage] "
                    "[--out FILE.md] [-v]\n";
       return 2;
@@ -103,8 +108,7 @@ int main(int argc, char** argv) {
   md << fmt::format(
       "\nOverall: {}/{} right ({:.1f} %); false alarms on clean data: {}/{}. {:.0f} s on the "
       "project's 2-core machine.\n",
-      right_total, total, 100.0 * right_total / std::max(total, 1), clean_false, clean_total,
-      secs);
+      right_total, total, 100.0 * right_total / std::max(total, 1), clean_false, clean_total, secs);
   std::cout << md.str();
   if (!out.empty()) write_file_atomically(out, md.str());
   return 0;

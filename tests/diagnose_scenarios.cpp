@@ -63,7 +63,8 @@ Scenario make_scenario(const std::string& side, const std::string& effect, int i
     e.creep_tau_s = (side == "load" ? r.protocol.dwell_s : r.voltage.dwell_s) *
                     pick(std::array{0.5, 1.0, 2.0}, index, 7);
   }
-  if (effect == "minor_loop_noncongruence") e.minor_loop_noncongruence = s.magnitude = m(0.1, 0.2, 0.3);
+  if (effect == "minor_loop_noncongruence")
+    e.minor_loop_noncongruence = s.magnitude = m(0.1, 0.2, 0.3);
   if (effect == "load_shape_coupling") e.load_shape_coupling = s.magnitude = m(0.3, 0.6, 1.0);
   if (effect == "offset_nonlinearity") e.offset_nonlinearity = s.magnitude = m(0.05, 0.1, 0.2);
   return s;
@@ -78,7 +79,8 @@ Diagnosis diagnose_scenario(const Scenario& s, const DiagnoseOptions& options) {
   if (s.side == "voltage") {
     data.input = select_input(m, "voltage_V").values;
     data.load_N = m.find(Quantity::kLoad)->values;
-    for (double v : m.find(Quantity::kSegment)->values) data.segments.push_back(static_cast<int>(v));
+    for (double v : m.find(Quantity::kSegment)->values)
+      data.segments.push_back(static_cast<int>(v));
   } else {
     data.input = select_input(m).values;
   }

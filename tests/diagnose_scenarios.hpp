@@ -26,8 +26,9 @@ struct Scenario {
 inline std::vector<std::string> scenario_effects(const std::string& side) {
   if (side == "load")
     return {"none", "lonely_stroke", "creep", "drift", "minor_loop_noncongruence", "outliers"};
-  return {"none",  "lonely_stroke",       "creep",   "drift", "load_shape_coupling",
-          "offset_nonlinearity", "outliers"};
+  return {"none",    "lonely_stroke",       "creep",
+          "drift",   "load_shape_coupling", "offset_nonlinearity",
+          "outliers"};
 }
 
 /// Scenario number `index` of an effect on a side (deterministic).

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "diagnose_scenarios.hpp"
+#include "scpkit/error.hpp"
 #include "test_support.hpp"
 
 namespace scpkit {
@@ -32,11 +33,47 @@ void expect_named(const std::string& side, const std::string& effect,
   }
 }
 
-
-TEST(Diagnose, LoadTestsCleanDriftOutliers) {
+TEST(Diagnose, LoadTestsCleanDriftOutliersCreep) {
   expect_named("load", "none", {0, 1, 2});
-  expect_named("load", "drift", {0, 1});
+  expect_named("load", "drift", {1, 2});
   expect_named("load", "outliers", {0, 1});
+  expect_named("load", "creep", {2});  // the largest creep level; the rest: the confusion matrix
+}
+
+TEST(Diagnose, VoltageTestsCleanKneeLonelyStroke) {
+  expect_named("voltage", "none", {0});
+  expect_named("voltage", "offset_nonlinearity", {2});
+  expect_named("voltage", "lonely_stroke", {2});
+}
+
+TEST(Diagnose, TheDriftExtensionGainsOnHeldOutData) {
+  const Diagnosis d = testing::diagnose_scenario(make_scenario("load", "drift", 2));
+  const auto it = std::find_if(d.findings.begin(), d.findings.end(),
+                               [](const Finding& f) { return f.effect == "drift"; });
+  ASSERT_NE(it, d.findings.end());
+  EXPECT_TRUE(it->detected);
+  EXPECT_LT(it->p_value, 0.01);
+  EXPECT_GT(it->gain_pct, 5.0);
+  EXPECT_LT(it->heldout_rms_after, it->heldout_rms_before);
+  // Every effect of the vocabulary is reported once, in SPEC order.
+  ASSERT_EQ(d.findings.size(), effect_names().size());
+  for (std::size_t i = 0; i < d.findings.size(); ++i)
+    EXPECT_EQ(d.findings[i].effect, effect_names()[i]);
+  EXPECT_EQ(d.heldout_by, "cycles");
+}
+
+TEST(Diagnose, RefusesWhatCannotBeDiagnosed) {
+  DiagnoseData d;
+  d.input.assign(20, 1.0);
+  d.output.assign(20, 1.0);
+  EXPECT_THROW_MSG(diagnose(d), IdentificationError, "too few");
+  d.input.resize(60);
+  d.output.assign(60, 2.0);
+  for (std::size_t t = 0; t < 60; ++t) d.input[t] = static_cast<double>(t % 10);
+  EXPECT_THROW_MSG(diagnose(d), IdentificationError, "never changes");
+  d.output[3] = 1.0;
+  d.time_s.assign(5, 0.0);
+  EXPECT_THROW_MSG(diagnose(d), InvalidArgument, "different lengths");
 }
 
 }  // namespace

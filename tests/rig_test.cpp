@@ -205,6 +205,80 @@ TEST(Rig, BadSpecsAreRejectedWithTheReason) {
   s = RigSpec{};
   s.effects.minor_loop_noncongruence = 0.6;
   EXPECT_THROW_MSG(s.validate(), InvalidArgument, "<= 0.4");
+  s = RigSpec{};
+  s.effects.offset_nonlinearity = 0.1;  // a load test has one load sequence, no maps
+  EXPECT_THROW_MSG(s.validate(), InvalidArgument, "voltage tests");
+}
+
+// Voltage tests, noise-free: column 5 of each row is disp_mm, column 3 the load in g.
+std::vector<std::vector<double>> voltage_rows(const RigEffects& e, double spread = 0.0) {
+  RigSpec s = clean_spec(2, "scp");
+  s.test = "voltage";
+  s.length_mm = 70.0;
+  s.voltage.dwell_spread = spread;
+  s.effects = e;
+  return run_rig(s, card()).rows;
+}
+
+TEST(Rig, OffsetNonlinearityIsAKneeAtLowLoad) {
+  // f1 += m R k(F) and f2 *= 1 - m k(F), k = exp(-(F - F_lo) / (0.2 dF)): at the lowest load
+  // the first reading (H = 0) moves by exactly m R; far from it, the change decays as k.
+  const RigSpec probe = [] {
+    RigSpec s;
+    s.test = "voltage";
+    return s;
+  }();
+  const VoltageTruth truth = rig_voltage_truth(probe);
+  double R = 0.0;
+  for (double g : probe.voltage.loads_g) R = std::max(R, std::abs(truth.f2(g * 9.80665e-3)));
+  for (double m : {0.05, 0.2}) {
+    RigEffects e;
+    e.offset_nonlinearity = m;
+    const auto with = voltage_rows(e), without = voltage_rows({});
+    ASSERT_EQ(with.size(), without.size());
+    const double shift = (with[0][5] - without[0][5]) / 70.0;  // strain
+    EXPECT_NEAR(shift, m * R, 1e-9 * R);
+    const double k_last = std::exp(-1.0 / 0.2);
+    EXPECT_NEAR((with.back()[5] - without.back()[5]) / 70.0, m * R * k_last, 1e-9 * R);
+  }
+}
+
+TEST(Rig, LoadShapeCouplingLeavesTheLowestLoadAndReshapesTheHighest) {
+  RigEffects e;
+  e.load_shape_coupling = 0.8;
+  const auto with = voltage_rows(e), without = voltage_rows({});
+  double low = 0.0, high = 0.0;
+  for (std::size_t i = 0; i < with.size(); ++i) {
+    const double d = std::abs(with[i][5] - without[i][5]);
+    (with[i][3] == with.front()[3] ? low : high) =
+        std::max(d, with[i][3] == with.front()[3] ? low : high);
+  }
+  EXPECT_EQ(low, 0.0);
+  EXPECT_GT(high, 1e-3);  // mm: the shape at the other loads changed
+  // Offsets (H = 0 at each segment's first reading) are untouched: only the shape moves.
+  for (std::size_t i = 0; i < with.size(); ++i) {
+    if (i == 0 || with[i][2] != with[i - 1][2]) {
+      EXPECT_NEAR(with[i][5], without[i][5], 1e-12);
+    }
+  }
+}
+
+TEST(Rig, DwellSpreadVariesTheHoldsWithinItsBounds) {
+  const auto constant = voltage_rows({});
+  for (const auto& row : constant) EXPECT_EQ(row[1], 60.0);
+  const auto varied = voltage_rows({}, 1.0);
+  double lo = 1e9, hi = 0.0;
+  for (std::size_t i = 0; i < varied.size(); ++i) {
+    lo = std::min(lo, varied[i][1]);
+    hi = std::max(hi, varied[i][1]);
+    if (i > 0) {
+      EXPECT_NEAR(varied[i][0] - varied[i - 1][0], varied[i][1], 1e-6);
+    }
+  }
+  EXPECT_GE(lo, 30.0 - 1e-9);
+  EXPECT_LE(hi, 120.0 + 1e-9);
+  EXPECT_LT(lo, 40.0);  // the spread is used, not just allowed
+  EXPECT_GT(hi, 90.0);
 }
 
 }  // namespace

@@ -190,19 +190,10 @@ std::string Baseline::name() const {
              : fmt::format("preisach (L = {})", options_.levels);
 }
 
-PreisachModel Baseline::fit_operator(const std::vector<double>& u,
-                                     const std::vector<char>& train) const {
-  PreisachFitOptions o = options_;
-  const auto [lo, hi] = std::minmax_element(u.begin(), u.end());
-  o.lo = *lo;
-  o.hi = *hi;
-  o.exclude.resize(u.size());
-  for (std::size_t t = 0; t < u.size(); ++t) o.exclude[t] = train[t] ? 0 : 1;
-  return fit_preisach(u, rec_.y, {}, o).model;
-}
-
-FoldFit Baseline::fit(const std::vector<char>& train, const OutputFilter& filter) const {
+FoldFit Baseline::fit(const std::vector<char>& train, const Variant& variant) const {
   const std::vector<double>& u = rec_.u;
+  const std::vector<double>& y = variant.y ? *variant.y : rec_.y;
+  const OutputFilter& filter = variant.filter;
   const std::size_t n = rec_.size();
   FoldFit out;
   std::vector<char> exclude(n);
@@ -219,9 +210,10 @@ FoldFit Baseline::fit(const std::vector<char>& train, const OutputFilter& filter
   };
   PreisachFitOptions o = options_;
   o.output_filter = filter;
+  if (variant.quick) o.grid_shifts = 1;
   if (!rec_.several_loads) {
     o.exclude = exclude;
-    out.pred = simulate(fit_preisach(u, rec_.y, {}, o).model);
+    out.pred = simulate(fit_preisach(u, y, {}, o).model);
     return out;
   }
   const std::size_t S = rec_.seg_first.size();
@@ -233,7 +225,7 @@ FoldFit Baseline::fit(const std::vector<char>& train, const OutputFilter& filter
     for (std::size_t t = rec_.seg_first[s]; t < rec_.seg_first[s] + rec_.seg_count[s]; ++t) {
       if (!train[t]) continue;
       us.push_back(u[t]);
-      ys.push_back(rec_.y[t]);
+      ys.push_back(y[t]);
     }
     if (us.size() < 3) continue;
     const auto [a, b] = line_fit(us, ys);
@@ -250,7 +242,7 @@ FoldFit Baseline::fit(const std::vector<char>& train, const OutputFilter& filter
     for (std::size_t t = 0; t < n; ++t) {
       const auto s = static_cast<std::size_t>(rec_.seg[t]);
       if (!train[t] || !out.free[s]) continue;
-      hn[t] = (rec_.y[t] - out.a[s]) / out.b[s];
+      hn[t] = (y[t] - out.a[s]) / out.b[s];
       ex[t] = 0;
     }
     o.exclude = ex;
@@ -261,7 +253,7 @@ FoldFit Baseline::fit(const std::vector<char>& train, const OutputFilter& filter
       for (std::size_t t = rec_.seg_first[s]; t < rec_.seg_first[s] + rec_.seg_count[s]; ++t) {
         if (!train[t]) continue;
         hs.push_back(out.h[t]);
-        ys.push_back(rec_.y[t]);
+        ys.push_back(y[t]);
       }
       const auto [a, b] = line_fit(hs, ys);
       if (std::abs(b) > 1e-12 * rec_.range) {

@@ -60,11 +60,15 @@ class Baseline {
  public:
   /// Chooses L and the smoothness once (cross-validation on the whole record), then fixes them.
   Baseline(const Record& rec, const PreisachFitOptions& initial);
-  /// The model fitted on the rows where train != 0. With a filter, y = L[model] (creep).
-  FoldFit fit(const std::vector<char>& train, const OutputFilter& filter = {}) const;
-  /// Load tests: the Preisach operator fitted on `train` with the input replaced by u (the
-  /// moving Preisach extension fits on the shifted input).
-  PreisachModel fit_operator(const std::vector<double>& u, const std::vector<char>& train) const;
+  /// Variations of the fit that extensions need.
+  struct Variant {
+    OutputFilter filter;                   ///< y = L[model] (creep)
+    const std::vector<double>* y = nullptr;  ///< fit this response instead of the record's
+    bool quick = false;                    ///< one grid instead of the shifted-grid average
+  };
+  /// The model fitted on the rows where train != 0, predicting every row.
+  FoldFit fit(const std::vector<char>& train, const Variant& variant) const;
+  FoldFit fit(const std::vector<char>& train) const { return fit(train, Variant{}); }
   const PreisachFitOptions& options() const { return options_; }
   std::string name() const;
 

@@ -273,18 +273,19 @@ Finding detect_creep(Context& ctx) {
         std::vector<double> best_p = ctx.by_fold[static_cast<std::size_t>(k)].pred;
         double best = std::numeric_limits<double>::infinity();
         Kelvin best_k{0.0, 0.0};
-        for (const Kelvin& kv : candidates) {
-          const std::vector<double> p = ctx.base.fit(train, filter_for(kv)).pred;
+        for (const Kelvin& kv : candidates) {  // chosen on one grid, then refitted
+          const std::vector<double> p =
+              ctx.base.fit(train, {filter_for(kv), nullptr, true}).pred;
           double ss = 0.0;
           for (std::size_t t = 0; t < rec.size(); ++t) {
             if (train[t]) ss += (rec.y[t] - p[t]) * (rec.y[t] - p[t]);
           }
           if (ss < best) {
             best = ss;
-            best_p = p;
             best_k = kv;
           }
         }
+        best_p = ctx.base.fit(train, {filter_for(best_k), nullptr, false}).pred;
         chosen += fmt::format("{}c {:g}, tau {:.3g} s", chosen.empty() ? "" : "; ", best_k.c,
                               best_k.tau);
         return best_p;
@@ -296,41 +297,67 @@ Finding detect_creep(Context& ctx) {
 
 Finding detect_lonely_stroke(Context& ctx) {
   const Record& rec = ctx.rec;
+  const std::size_t n = rec.size();
+  // The running maximum of the input since the last load change (or the start), normalised,
+  // and the sign of its term: +1 in the first segment and after a load decrease, -1 after an
+  // increase (paper 001's open case; load tests: one segment).
   const auto [umin, umax] = std::minmax_element(rec.u.begin(), rec.u.end());
   const double span = std::max(*umax - *umin, 1e-300);
-  if (!rec.several_loads) {
-    return feature_finding(
-        ctx, "lonely_stroke", "baseline + running-maximum term (expanded plane, paper 001)",
-        [&](const FoldFit&) {
-          Eigen::MatrixXd X(static_cast<Eigen::Index>(rec.size()), 1);
-          double M = rec.u.front();
-          for (std::size_t t = 0; t < rec.size(); ++t) {
-            M = std::max(M, rec.u[t]);
-            X(static_cast<Eigen::Index>(t), 0) = (M - *umin) / span;
-          }
-          return X;
-        },
-        "the running maximum of the input (first rise against later cycles)");
+  std::vector<double> m(n);
+  for (std::size_t s = 0; s < rec.seg_first.size(); ++s) {
+    const double sign =
+        rec.several_loads && s > 0 && rec.seg_load[s] > rec.seg_load[s - 1] ? -1.0 : 1.0;
+    double M = rec.u[rec.seg_first[s]];
+    for (std::size_t t = rec.seg_first[s]; t < rec.seg_first[s] + rec.seg_count[s]; ++t) {
+      M = std::max(M, rec.u[t]);
+      m[t] = sign * (M - *umin) / span;
+    }
   }
-  // Re-armed at every load change, scaled by the segment's range; one coefficient after load
-  // decreases (and the first segment), one after increases (paper 001: the sign may differ).
-  return feature_finding(
+  // The term scales with each segment's range (f2) on voltage tests, with the output range on
+  // load tests; its size lambda is chosen on each fold's training rows.
+  auto scale = [&](const FoldFit& fit, std::size_t t) {
+    return rec.several_loads ? fit.b[static_cast<std::size_t>(rec.seg[t])] : rec.range;
+  };
+  std::string chosen;
+  Finding f = model_finding(
       ctx, "lonely_stroke",
-      "augmented baseline + running-maximum term re-armed at each load change (paper 001)",
-      [&](const FoldFit& fit) {
-        Eigen::MatrixXd X = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(rec.size()), 2);
-        for (std::size_t s = 0; s < rec.seg_first.size(); ++s) {
-          const int col = s > 0 && rec.seg_load[s] > rec.seg_load[s - 1] ? 1 : 0;
-          double M = *umin;
-          for (std::size_t t = rec.seg_first[s]; t < rec.seg_first[s] + rec.seg_count[s]; ++t) {
-            M = std::max(M, rec.u[t]);
-            X(static_cast<Eigen::Index>(t), col) = fit.b[s] * (M - *umin) / span;
+      rec.several_loads
+          ? "augmented baseline + running-maximum term re-armed at each load change (paper 001)"
+          : "baseline + running-maximum term (expanded plane, paper 001)",
+      [&](int k) {
+        const std::vector<char> train = ctx.train_mask(k);
+        const FoldFit& base = ctx.by_fold[static_cast<std::size_t>(k)];
+        auto shifted = [&](double lambda) {
+          std::vector<double> y(rec.y);
+          for (std::size_t t = 0; t < n; ++t) y[t] -= lambda * scale(base, t) * m[t];
+          return y;
+        };
+        double best = std::numeric_limits<double>::infinity(), best_l = 0.0;
+        for (double lambda : {0.0, -0.15, -0.08, -0.04, -0.02, 0.02, 0.04, 0.08, 0.15}) {
+          const std::vector<double> y = shifted(lambda);
+          const std::vector<double> p =
+              lambda == 0.0 ? base.pred : ctx.base.fit(train, {{}, &y, true}).pred;
+          double ss = 0.0;
+          for (std::size_t t = 0; t < n; ++t) {
+            if (train[t]) ss += std::pow(y[t] - p[t], 2);
+          }
+          if (ss < best * (1.0 - 1e-9)) {
+            best = ss;
+            best_l = lambda;
           }
         }
-        centre_per_segment(rec, X);
-        return X;
+        chosen += fmt::format("{}{:+g}", chosen.empty() ? "" : ", ", best_l);
+        if (best_l == 0.0) return base.pred;
+        const std::vector<double> y = shifted(best_l);
+        const FoldFit fit = ctx.base.fit(train, {{}, &y, false});
+        std::vector<double> p(fit.pred);
+        for (std::size_t t = 0; t < n; ++t) p[t] += best_l * scale(base, t) * m[t];
+        return p;
       },
-      "the running maximum of the input since the last load change");
+      "a term in the running maximum of the input since the last load change (first rise "
+      "against later cycles)");
+  f.extended_model += " (lambda per fold: " + chosen + ")";
+  return f;
 }
 
 Finding detect_load_shape_coupling(Context& ctx) {
@@ -426,64 +453,14 @@ Finding detect_offset_nonlinearity(Context& ctx) {
 }
 
 Finding detect_noncongruence(Context& ctx) {
-  const Record& rec = ctx.rec;
-  if (rec.several_loads) {
-    return not_tested(ctx, "minor_loop_noncongruence",
-                      "tested on load tests (one input); here the augmented maps absorb it");
-  }
-  const auto [umin, umax] = std::minmax_element(rec.u.begin(), rec.u.end());
-  const auto [ymin, ymax] = std::minmax_element(rec.y.begin(), rec.y.end());
-  const double gain = (*umax - *umin) / (*ymax - *ymin), y0 = *ymin;
-  const std::vector<double> shifts = {-0.3, -0.15, -0.05, 0.0, 0.05, 0.15, 0.3};
-  // The moving model's response: y_t = Gamma[u_t + a gain (y_t - y0)], a fixed point per step.
-  auto simulate = [&](const PreisachModel& m, double a) {
-    std::vector<double> y(rec.size());
-    PreisachState st = PreisachState::negative_saturation(m.grid());
-    double prev = m.output(st);
-    for (std::size_t t = 0; t < rec.size(); ++t) {
-      const PreisachState before = st;
-      double yt = prev;
-      for (int it = 0; it < 40; ++it) {
-        st = before;
-        const double next = m.step(st, rec.u[t] + a * gain * (yt - y0));
-        const bool done = std::abs(next - yt) < 1e-12 * rec.range;
-        yt = 0.5 * (yt + next);  // damped: converges for |a| gain slope < 3
-        if (done) break;
-      }
-      st = before;
-      yt = m.step(st, rec.u[t] + a * gain * (yt - y0));
-      y[t] = prev = yt;
-    }
-    return y;
-  };
-  return model_finding(
-      ctx, "minor_loop_noncongruence", "moving Preisach model Gamma[u + a y] (a chosen in-fold)",
-      [&](int k) {
-        const std::vector<char> train = ctx.train_mask(k);
-        std::vector<double> best_p = ctx.by_fold[static_cast<std::size_t>(k)].pred;
-        double best = std::numeric_limits<double>::infinity();
-        for (double a : shifts) {
-          std::vector<double> p;
-          if (a == 0.0) {
-            p = ctx.by_fold[static_cast<std::size_t>(k)].pred;
-          } else {
-            std::vector<double> ue(rec.size());
-            for (std::size_t t = 0; t < rec.size(); ++t)
-              ue[t] = rec.u[t] + a * gain * (rec.y[t] - y0);
-            p = simulate(ctx.base.fit_operator(ue, train), a);
-          }
-          double ss = 0.0;
-          for (std::size_t t = 0; t < rec.size(); ++t) {
-            if (train[t]) ss += (rec.y[t] - p[t]) * (rec.y[t] - p[t]);
-          }
-          if (ss < best) {
-            best = ss;
-            best_p = p;
-          }
-        }
-        return best_p;
-      },
-      "a moving Preisach model (the input shifted by the output: minor loops differ by history)");
+  // Measured and withdrawn (docs/diagnose.md): a moving Preisach extension Gamma[u + a y],
+  // a chosen in-fold, gained as much held-out error on clean rig data as on non-congruent data
+  // (false alarms on 3 of 6 clean load tests, 0 of 6 non-congruent ones found), because a
+  // protocol without two minor loops between the same extrema reached from different
+  // histories cannot tell the two apart. No detector is claimed until one is.
+  return not_tested(ctx, "minor_loop_noncongruence",
+                    "not identifiable from these protocols: congruency needs minor loops between "
+                    "the same extrema reached from different histories (docs/diagnose.md)");
 }
 
 Finding detect_outliers(Context& ctx) {

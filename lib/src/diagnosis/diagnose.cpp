@@ -39,8 +39,15 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   d.findings.push_back(detect_offset_nonlinearity(ctx));
   d.findings.push_back(detect_outliers(ctx));
 
-  // Outliers dominate the residual variance when present, so they are named first; otherwise
-  // the detected effect whose extension gains most on held-out data.
+  // Outliers dominate the residual variance when present, so they are named first. A lonely
+  // stroke shifts the offset of the first load's segment against the others, which a knee in
+  // the maps can mimic (the converse does not hold: on knee data the running-maximum term gains
+  // nothing), so a detected lonely stroke is preferred to offset_nonlinearity. Otherwise the
+  // detected effect whose extension gains most on held-out data.
+  auto detected = [&](const std::string& e) {
+    return std::any_of(d.findings.begin(), d.findings.end(),
+                       [&](const Finding& f) { return f.effect == e && f.detected; });
+  };
   const Finding* best = nullptr;
   for (const Finding& f : d.findings) {
     if (!f.detected) continue;
@@ -48,6 +55,7 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
       best = &f;
       break;
     }
+    if (f.effect == "offset_nonlinearity" && detected("lonely_stroke")) continue;
     if (!best || f.gain_pct > best->gain_pct) best = &f;
   }
   if (best) {
