@@ -62,9 +62,9 @@ class Baseline {
   Baseline(const Record& rec, const PreisachFitOptions& initial);
   /// Variations of the fit that extensions need.
   struct Variant {
-    OutputFilter filter;                   ///< y = L[model] (creep)
+    OutputFilter filter;                     ///< y = L[model] (creep)
     const std::vector<double>* y = nullptr;  ///< fit this response instead of the record's
-    bool quick = false;                    ///< one grid instead of the shifted-grid average
+    bool quick = false;                      ///< one grid instead of the shifted-grid average
   };
   /// The model fitted on the rows where train != 0, predicting every row.
   FoldFit fit(const std::vector<char>& train, const Variant& variant) const;

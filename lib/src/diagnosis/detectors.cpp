@@ -274,8 +274,7 @@ Finding detect_creep(Context& ctx) {
         double best = std::numeric_limits<double>::infinity();
         Kelvin best_k{0.0, 0.0};
         for (const Kelvin& kv : candidates) {  // chosen on one grid, then refitted
-          const std::vector<double> p =
-              ctx.base.fit(train, {filter_for(kv), nullptr, true}).pred;
+          const std::vector<double> p = ctx.base.fit(train, {filter_for(kv), nullptr, true}).pred;
           double ss = 0.0;
           for (std::size_t t = 0; t < rec.size(); ++t) {
             if (train[t]) ss += (rec.y[t] - p[t]) * (rec.y[t] - p[t]);
@@ -286,8 +285,8 @@ Finding detect_creep(Context& ctx) {
           }
         }
         best_p = ctx.base.fit(train, {filter_for(best_k), nullptr, false}).pred;
-        chosen += fmt::format("{}c {:g}, tau {:.3g} s", chosen.empty() ? "" : "; ", best_k.c,
-                              best_k.tau);
+        chosen +=
+            fmt::format("{}c {:g}, tau {:.3g} s", chosen.empty() ? "" : "; ", best_k.c, best_k.tau);
         return best_p;
       },
       "the response lags its rate-independent value with the readings' own timing");
