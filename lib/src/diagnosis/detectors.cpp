@@ -47,6 +47,26 @@ Score score(Context& ctx, const std::vector<double>& after, const std::vector<ch
   return s;
 }
 
+// Squared error of a prediction on the training rows (how extensions choose their parameters).
+double training_sse(const std::vector<double>& y, const std::vector<double>& p,
+                    const std::vector<char>& train) {
+  double ss = 0.0;
+  for (std::size_t t = 0; t < y.size(); ++t) {
+    if (train[t]) ss += (y[t] - p[t]) * (y[t] - p[t]);
+  }
+  return ss;
+}
+
+// A tested finding's held-out numbers and verdict from its score.
+void record(Finding& f, const Context& ctx, const Score& s, double p_value) {
+  f.tested = true;
+  f.p_value = p_value;
+  f.heldout_rms_before = ctx.rms_before;
+  f.heldout_rms_after = s.rms_after;
+  f.gain_pct = s.gain_pct;
+  f.detected = f.p_value < ctx.opt.alpha && f.gain_pct >= ctx.opt.min_gain_pct;
+}
+
 // The segment's normalised load (F - mean F) / (F range) for each row.
 std::vector<double> centred_load(const Record& rec) {
   const auto [lo, hi] = std::minmax_element(rec.seg_load.begin(), rec.seg_load.end());
@@ -122,7 +142,6 @@ Finding feature_finding(Context& ctx, const std::string& effect, const std::stri
   const Record& rec = ctx.rec;
   Finding f;
   f.effect = effect;
-  f.tested = true;
   f.extended_model = extension;
   std::vector<Eigen::MatrixXd> X;
   for (const FoldFit& fit : ctx.by_fold) X.push_back(features(fit));
@@ -178,11 +197,7 @@ Finding feature_finding(Context& ctx, const std::string& effect, const std::stri
     }
   }
   const Score s = score(ctx, after);
-  f.p_value = std::max(p_signature, s.p_value);
-  f.heldout_rms_before = ctx.rms_before;
-  f.heldout_rms_after = s.rms_after;
-  f.gain_pct = s.gain_pct;
-  f.detected = f.p_value < ctx.opt.alpha && f.gain_pct >= ctx.opt.min_gain_pct;
+  record(f, ctx, s, std::max(p_signature, s.p_value));
   f.evidence = fmt::format(
       "{} explains {:.0f} % of the held-out residual variance (block-permutation p = {:.3f}); "
       "the extension changes held-out E_RMS from {:.3f} to {:.3f} % of range (sign-flip p = "
@@ -197,7 +212,6 @@ Finding model_finding(Context& ctx, const std::string& effect, const std::string
   const Record& rec = ctx.rec;
   Finding f;
   f.effect = effect;
-  f.tested = true;
   f.extended_model = extension;
   std::vector<double> after(ctx.oof);
   for (int k = 0; k < rec.folds; ++k) {
@@ -207,12 +221,8 @@ Finding model_finding(Context& ctx, const std::string& effect, const std::string
     }
   }
   const Score s = score(ctx, after);
-  f.p_value = s.p_value;
-  f.heldout_rms_before = ctx.rms_before;
-  f.heldout_rms_after = s.rms_after;
-  f.gain_pct = s.gain_pct;
+  record(f, ctx, s, s.p_value);
   f.score = f.gain_pct;
-  f.detected = f.p_value < ctx.opt.alpha && f.gain_pct >= ctx.opt.min_gain_pct;
   f.evidence = fmt::format(
       "{}: held-out E_RMS from {:.3f} to {:.3f} % of range (sign-flip p = {:.3f} over {} "
       "blocks)",
@@ -336,10 +346,7 @@ Finding detect_lonely_stroke(Context& ctx) {
           const std::vector<double> y = shifted(lambda);
           const std::vector<double> p =
               lambda == 0.0 ? base.pred : ctx.base.fit(train, {{}, &y, true}).pred;
-          double ss = 0.0;
-          for (std::size_t t = 0; t < n; ++t) {
-            if (train[t]) ss += std::pow(y[t] - p[t], 2);
-          }
+          const double ss = training_sse(y, p, train);
           if (ss < best * (1.0 - 1e-9)) {
             best = ss;
             best_l = lambda;
