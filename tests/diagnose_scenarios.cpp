@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <array>
 
 namespace scpkit::testing {
@@ -20,8 +21,17 @@ T pick(const std::array<T, N>& v, int index, std::uint64_t salt) {
 }  // namespace
 
 std::string Scenario::describe() const {
-  return fmt::format("{} {} {:g} seed {} noise {:g} mm", side, effect, magnitude, spec.seed,
-                     spec.noise_mm);
+  if (side == "load")
+    return fmt::format("load {} {:g} seed {} noise {:g} mm, {} x{} spread {:g} per-hold {}{}",
+                       effect, magnitude, spec.seed, spec.noise_mm, spec.protocol.shape,
+                       spec.protocol.cycles, spec.protocol.dwell_spread,
+                       spec.protocol.readings_per_hold,
+                       spec.protocol.congruency ? " congruency" : "");
+  return fmt::format("voltage {} {:g} seed {} noise {:g} mm, {} loads from {:g} g, {} truth, "
+                     "spread {:g} per-hold {}",
+                     effect, magnitude, spec.seed, spec.noise_mm, spec.voltage.loads_g.size(),
+                     spec.voltage.loads_g.front(), spec.voltage.truth, spec.voltage.dwell_spread,
+                     spec.voltage.readings_per_hold);
 }
 
 Scenario make_scenario(const std::string& side, const std::string& effect, int index) {
@@ -41,6 +51,12 @@ Scenario make_scenario(const std::string& side, const std::string& effect, int i
     r.protocol.steps_per_half = pick(std::array{6, 8, 10}, index, 3);
     r.protocol.minor_loops = pick(std::array{2, 3, 4}, index, 4);
     r.protocol.dwell_spread = pick(std::array{0.0, 0.5, 1.0}, index, 5);
+    r.protocol.shape = pick(std::array<std::string, 2>{"damped", "repeated"}, index, 8);
+    r.protocol.readings_per_hold = pick(std::array{1, 1, 3}, index, 9);
+    // Loops between the same extrema from different histories: always where the hidden effect
+    // needs them to be seen, at random elsewhere (so clean data has them too).
+    r.protocol.congruency =
+        effect == "minor_loop_noncongruence" || pick(std::array{false, true}, index, 10);
   } else {
     r.specimen = "scp";
     r.length_mm = 70.0;
@@ -53,6 +69,13 @@ Scenario make_scenario(const std::string& side, const std::string& effect, int i
     r.voltage.steps_per_half = pick(std::array{7, 9, 11}, index, 4);
     r.voltage.truth = pick(std::array<std::string, 2>{"gpi", "preisach"}, index, 5);
     r.voltage.dwell_spread = pick(std::array{0.0, 0.5, 1.0}, index, 6);
+    r.voltage.readings_per_hold = pick(std::array{1, 1, 3}, index, 9);
+    if (pick(std::array{false, true}, index, 8)) {  // loads in a shuffled order
+      std::vector<double>& g = r.voltage.loads_g;
+      const std::size_t k = static_cast<std::size_t>(index) % g.size();
+      std::rotate(g.begin(), g.begin() + static_cast<std::ptrdiff_t>(k), g.end());
+      for (std::size_t i = 1; i + 1 < g.size(); i += 3) std::swap(g[i], g[i + 1]);
+    }
   }
   RigEffects& e = r.effects;
   if (effect == "drift") e.drift = s.magnitude = m(0.03, 0.06, 0.12);

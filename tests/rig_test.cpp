@@ -55,6 +55,62 @@ TEST(Rig, IsDeterministicAndWritesTheSpecFormat) {
   }
 }
 
+TEST(Rig, ReadingsDuringHoldsShowCreepStillMovingAndNothingElse) {
+  // k readings per hold: the input repeats k times, dwell_s counts the time held so far, and a
+  // rate-independent specimen reads the same value throughout the hold, while creep keeps
+  // moving in the direction of the last load step, by less at each reading (Kelvin element).
+  for (const double creep : {0.0, 0.3}) {
+    RigSpec s = clean_spec(2, "thread");
+    s.protocol.readings_per_hold = 4;
+    s.effects.creep = creep;
+    const RigRun run = run_rig(s, card());
+    const std::vector<double> load = column(run, "load_g"), held = column(run, "dwell_s");
+    const std::vector<double> y = column(run, "disp_mm");
+    ASSERT_EQ(load.size(), 4 * rig_load_protocol(s).size());
+    for (std::size_t i = 4; i + 4 <= load.size(); i += 4) {
+      const double step = load[i] - load[i - 1];
+      for (std::size_t j = 1; j < 4; ++j) {
+        ASSERT_EQ(load[i + j], load[i]);
+        ASSERT_NEAR(held[i + j], s.protocol.dwell_s * static_cast<double>(j + 1) / 4.0, 1e-9);
+        const double move = y[i + j] - y[i + j - 1];
+        if (creep == 0.0) {
+          ASSERT_NEAR(move, 0.0, 1e-12);
+        } else if (step != 0.0) {
+          ASSERT_GT(move * step, 0.0) << "reading " << i + j;
+          if (j > 1) {
+            ASSERT_LT(std::abs(move), std::abs(y[i + j - 1] - y[i + j - 2]));
+          }
+        }
+      }
+    }
+  }
+}
+
+TEST(Rig, RepeatedCyclesAndCongruencyLoopsFollowTheirDefinition) {
+  RigSpec s = clean_spec(2, "thread");
+  s.protocol.shape = "repeated";
+  s.protocol.cycles = 3;
+  s.protocol.steps_per_half = 5;
+  s.protocol.minor_loops = 0;
+  const std::vector<double> loads = rig_load_protocol(s);
+  ASSERT_EQ(loads.size(), 1u + 2 * 3 * 5 + 5);
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_DOUBLE_EQ(loads[static_cast<std::size_t>(10 * c)], 20.0);
+    EXPECT_DOUBLE_EQ(loads[static_cast<std::size_t>(10 * c + 5)], 250.0);
+  }
+  // With congruency each minor loop a <-> b is run twice more after a different history, so
+  // the input reaches the loop's lower turning point a from two different maxima.
+  s.protocol.minor_loops = 2;
+  s.protocol.congruency = true;
+  const std::vector<double> with = rig_load_protocol(s);
+  s.protocol.congruency = false;
+  const std::vector<double> without = rig_load_protocol(s);
+  // per loop: down to the minimum, up to c, then the loop twice (4 ramps), 5 readings each
+  EXPECT_EQ(with.size() - without.size(), 2u * (2 + 4) * 5);
+  s.protocol.shape = "sawtooth";
+  EXPECT_THROW(s.validate(), InvalidArgument);
+}
+
 TEST(Rig, ProtocolScalesLoadsWithPlyCount) {
   for (int p : {2, 4, 6}) {
     const auto loads = rig_load_protocol(clean_spec(p));

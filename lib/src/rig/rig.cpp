@@ -29,7 +29,7 @@ void RigSpec::validate() const {
       if (!(g > 0.0) || !std::isfinite(g)) throw_invalid("voltage-test loads must be > 0 g");
     }
     if (!(v.v_max > 0.0)) throw_invalid("v_max must be > 0");
-    if (v.cycles < 1 || v.steps_per_half < 1)
+    if (v.cycles < 1 || v.steps_per_half < 1 || v.readings_per_hold < 1)
       throw_invalid("voltage protocol counts must be positive");
     if (!(v.dwell_s > 0.0)) throw_invalid("voltage dwell_s must be > 0");
     if (v.truth != "gpi" && v.truth != "preisach")
@@ -53,8 +53,10 @@ void RigSpec::validate() const {
     throw_invalid("sensor resolution and noise must be >= 0");
   const LoadProtocol& p = protocol;
   if (!(p.min_g >= 0.0) || !(p.max_g > p.min_g)) throw_invalid("protocol needs 0 <= min_g < max_g");
-  if (p.cycles < 1 || p.steps_per_half < 1 || p.minor_loops < 0)
+  if (p.cycles < 1 || p.steps_per_half < 1 || p.minor_loops < 0 || p.readings_per_hold < 1)
     throw_invalid("protocol counts must be positive");
+  if (p.shape != "damped" && p.shape != "repeated")
+    throw_invalid("protocol shape must be damped or repeated, got '{}'", p.shape);
   if (!(p.dwell_s > 0.0)) throw_invalid("dwell_s must be > 0");
   if (!(p.dwell_spread >= 0.0) || !std::isfinite(p.dwell_spread))
     throw_invalid("dwell_spread must be finite and >= 0");
@@ -98,7 +100,8 @@ RigSpec load_rig_spec(const std::filesystem::path& path) {
   s.specimen = r.text(root, "specimen", s.specimen);
   if (const toml::table* v = r.table(root, "voltage")) {
     r.only_keys(
-        *v, {"loads_g", "v_max", "cycles", "steps_per_half", "dwell_s", "dwell_spread", "truth"});
+        *v, {"loads_g", "v_max", "cycles", "steps_per_half", "dwell_s", "dwell_spread",
+             "readings_per_hold", "truth"});
     VoltageProtocol& q = s.voltage;
     if (const toml::node* n = v->get("loads_g")) {
       const toml::array* a = n->as_array();
@@ -116,6 +119,8 @@ RigSpec load_rig_spec(const std::filesystem::path& path) {
         static_cast<int>(r.integer(*v, "steps_per_half", q.steps_per_half, 1, 10000));
     q.dwell_s = r.positive(*v, "dwell_s", q.dwell_s, false);
     q.dwell_spread = r.number(*v, "dwell_spread", q.dwell_spread, 0.0);
+    q.readings_per_hold =
+        static_cast<int>(r.integer(*v, "readings_per_hold", q.readings_per_hold, 1, 1000));
     q.truth = r.text(*v, "truth", q.truth);
   }
   s.plies = static_cast<int>(r.integer(root, "plies", s.plies, 1, 100));
@@ -132,8 +137,8 @@ RigSpec load_rig_spec(const std::filesystem::path& path) {
     s.coil = g;
   }
   if (const toml::table* p = r.table(root, "protocol")) {
-    r.only_keys(*p, {"min_g", "max_g", "scale_with_plies", "cycles", "steps_per_half",
-                     "minor_loops", "dwell_s", "dwell_spread"});
+    r.only_keys(*p, {"min_g", "max_g", "scale_with_plies", "shape", "cycles", "steps_per_half",
+                     "minor_loops", "congruency", "readings_per_hold", "dwell_s", "dwell_spread"});
     LoadProtocol& q = s.protocol;
     q.min_g = r.number(*p, "min_g", q.min_g, 0.0);
     q.max_g = r.positive(*p, "max_g", q.max_g, false);
@@ -144,6 +149,10 @@ RigSpec load_rig_spec(const std::filesystem::path& path) {
     q.minor_loops = static_cast<int>(r.integer(*p, "minor_loops", q.minor_loops, 0, 10000));
     q.dwell_s = r.positive(*p, "dwell_s", q.dwell_s, false);
     q.dwell_spread = r.number(*p, "dwell_spread", q.dwell_spread, 0.0);
+    q.shape = r.text(*p, "shape", q.shape);
+    q.congruency = r.boolean(*p, "congruency", q.congruency);
+    q.readings_per_hold =
+        static_cast<int>(r.integer(*p, "readings_per_hold", q.readings_per_hold, 1, 1000));
   }
   if (const toml::table* p = r.table(root, "sensor")) {
     r.only_keys(*p, {"resolution_mm", "noise_mm"});
@@ -223,24 +232,37 @@ std::vector<double> rig_load_protocol(const RigSpec& spec) {
     for (int k = 1; k <= p.steps_per_half; ++k)
       loads.push_back(from + (to - from) * k / p.steps_per_half);
   };
-  // Damped oscillation: amplitude falls geometrically to 15 % over the cycles.
   const int turns = 2 * p.cycles;
-  const double decay = std::pow(0.15, 1.0 / std::max(turns - 1, 1));
-  double amp = half;
-  for (int k = 1; k <= turns; ++k) {
-    ramp(k % 2 == 1 ? mid + amp : mid - amp);
-    amp *= decay;
+  if (p.shape == "repeated") {
+    for (int k = 1; k <= turns; ++k) ramp(k % 2 == 1 ? hi : lo);
+  } else {
+    // Damped oscillation: amplitude falls geometrically to 15 % over the cycles.
+    const double decay = std::pow(0.15, 1.0 / std::max(turns - 1, 1));
+    double amp = half;
+    for (int k = 1; k <= turns; ++k) {
+      ramp(k % 2 == 1 ? mid + amp : mid - amp);
+      amp *= decay;
+    }
   }
-  // Minor loops, each traversed twice, inside the range.
+  // Minor loops, each traversed twice, inside the range: after a common maximum, and (with
+  // `congruency`) once more after a lower turning point c reached from the minimum.
   std::mt19937_64 rng(spec.seed * 7919 + 17);
   std::uniform_real_distribution<double> U(0.0, 1.0);
   for (int m = 0; m < p.minor_loops; ++m) {
     const double a = lo + (hi - lo) * 0.6 * U(rng);
     const double b = a + (hi - a) * (0.3 + 0.6 * U(rng));
-    ramp(hi);  // a common maximum, then the loop
-    for (int rep = 0; rep < 2; ++rep) {
-      ramp(a);
-      ramp(b);
+    auto loop = [&] {
+      for (int rep = 0; rep < 2; ++rep) {
+        ramp(a);
+        ramp(b);
+      }
+    };
+    ramp(hi);
+    loop();
+    if (p.congruency) {
+      ramp(lo);
+      ramp(b + 0.5 * (hi - b));
+      loop();
     }
   }
   ramp(lo);
@@ -270,7 +292,6 @@ RigRun run_rig(const RigSpec& spec, const Material& material) {
   }
   const PreisachModel truth = rig_thread_truth(material);
   const std::vector<double> loads_g = rig_load_protocol(spec);
-  const std::size_t n = loads_g.size();
   std::mt19937_64 rng(spec.seed);
 
   // Nominal ranges for scaling the effects.
@@ -280,15 +301,19 @@ RigRun run_rig(const RigSpec& spec, const Material& material) {
   const double y_range = f_range / (material.tensile_modulus_Pa.value * material.ply_area_m2());
   const RigEffects& e = spec.effects;
 
-  std::vector<double> material_strain(n), time_s(n);
   const std::vector<double> dwell =
-      detail::dwell_times(n, spec.protocol.dwell_s, spec.protocol.dwell_spread, spec.seed);
+      detail::dwell_times(loads_g.size(), spec.protocol.dwell_s, spec.protocol.dwell_spread,
+                          spec.seed);
+  const detail::Readings readings =
+      detail::readings_during_holds(dwell, spec.protocol.readings_per_hold);
+  const std::size_t n = readings.step.size();
+  std::vector<double> material_strain(n), time_s(n);
   PreisachState state = PreisachState::negative_saturation(truth.grid());
   double viscous = 0.0, running_max = f_lo, t = 0.0;
   for (std::size_t k = 0; k < n; ++k) {
-    t += dwell[k];
+    t += readings.dt[k];
     time_s[k] = t;
-    const double f = loads_g[k] * kGram / spec.plies;
+    const double f = loads_g[readings.step[k]] * kGram / spec.plies;
     double y;
     if (e.minor_loop_noncongruence > 0.0) {
       // Moving Preisach model: input u + a * range_u * y / range_y, solved by fixed point.
@@ -305,7 +330,7 @@ RigRun run_rig(const RigSpec& spec, const Material& material) {
       y = truth.step(state, f);
     }
     if (e.creep > 0.0) {
-      viscous = y + (viscous - y) * std::exp(-dwell[k] / e.creep_tau_s);
+      viscous = y + (viscous - y) * std::exp(-readings.dt[k] / e.creep_tau_s);
       y = (1.0 - e.creep) * y + e.creep * viscous;
     }
     running_max = std::max(running_max, f);
@@ -349,7 +374,7 @@ RigRun run_rig(const RigSpec& spec, const Material& material) {
     run.columns = {"time_s", "dwell_s", "load_g", "disp_mm"};
   }
   for (std::size_t k = 0; k < n; ++k) {
-    std::vector<double> row{time_s[k], dwell[k], loads_g[k]};
+    std::vector<double> row{time_s[k], readings.held[k], loads_g[readings.step[k]]};
     if (spec.specimen == "pair") {
       row.push_back(thread[k]);
       row.push_back(scp[k]);

@@ -27,6 +27,25 @@ inline std::vector<double> dwell_times(std::size_t n, double dwell, double sprea
   return d;
 }
 
+/// The readings of a protocol whose step k is held for dwell[k]: `per_hold` readings per hold,
+/// equally spaced in time. For reading i: its step, the time since the previous reading, and
+/// how long its input has been held when it is taken (the dwell_s column).
+struct Readings {
+  std::vector<std::size_t> step;
+  std::vector<double> dt, held;
+};
+inline Readings readings_during_holds(const std::vector<double>& dwell, int per_hold) {
+  Readings r;
+  for (std::size_t k = 0; k < dwell.size(); ++k) {
+    for (int j = 1; j <= per_hold; ++j) {
+      r.step.push_back(k);
+      r.dt.push_back(dwell[k] / per_hold);
+      r.held.push_back(dwell[k] * j / per_hold);
+    }
+  }
+  return r;
+}
+
 /// The truth_effects metadata line.
 inline std::string effects_text(const RigEffects& e) {
   return fmt::format(

@@ -108,26 +108,29 @@ RigRun run_voltage_rig(const RigSpec& spec) {
     const double f2 = truth.f2(F) * (1.0 - e.offset_nonlinearity * knee(F));
     double running_max = 0.0;
     for (std::size_t i = 0; i < v_one.size(); ++i) {
-      const double dt = dwell[k * v_one.size() + i];
-      t += dt;
-      double y = f2 * h[i] + f1;
-      if (e.creep > 0.0) {
-        if (i == 0) viscous = y;
-        viscous = y + (viscous - y) * std::exp(-dt / e.creep_tau_s);
-        y = (1.0 - e.creep) * y + e.creep * viscous;
+      const double hold = dwell[k * v_one.size() + i];
+      for (int j = 1; j <= p.readings_per_hold; ++j) {
+        const double dt = hold / p.readings_per_hold;
+        t += dt;
+        double y = f2 * h[i] + f1;
+        if (e.creep > 0.0) {
+          if (i == 0 && j == 1) viscous = y;
+          viscous = y + (viscous - y) * std::exp(-dt / e.creep_tau_s);
+          y = (1.0 - e.creep) * y + e.creep * viscous;
+        }
+        // Lonely stroke, re-armed at every load change: the first rise differs from later
+        // cycles; after a load increase the repeatable loop lies on the other side (paper
+        // 001's open case), so the offset changes sign.
+        running_max = std::max(running_max, v_one[i]);
+        const double lonely_sign = k > 0 && p.loads_g[k] > p.loads_g[k - 1] ? -1.0 : 1.0;
+        y -= lonely_sign * e.lonely_stroke * f2 * running_max / p.v_max;
+        time_s.push_back(t);
+        dwell_col.push_back(hold * j / p.readings_per_hold);
+        load_g.push_back(p.loads_g[k]);
+        volts.push_back(v_one[i]);
+        strain.push_back(y);
+        segment.push_back(static_cast<double>(k));
       }
-      // Lonely stroke, re-armed at every load change: the first rise differs from later
-      // cycles; after a load increase the repeatable loop lies on the other side (paper 001's
-      // open case), so the offset changes sign.
-      running_max = std::max(running_max, v_one[i]);
-      const double lonely_sign = k > 0 && p.loads_g[k] > p.loads_g[k - 1] ? -1.0 : 1.0;
-      y -= lonely_sign * e.lonely_stroke * f2 * running_max / p.v_max;
-      time_s.push_back(t);
-      dwell_col.push_back(dt);
-      load_g.push_back(p.loads_g[k]);
-      volts.push_back(v_one[i]);
-      strain.push_back(y);
-      segment.push_back(static_cast<double>(k));
     }
   }
   const std::vector<double> pct = detail::measure_channel(strain, time_s, range, spec, rng);

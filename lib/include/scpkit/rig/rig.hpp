@@ -40,9 +40,19 @@ struct LoadProtocol {
   double min_g = 20.0;           ///< lowest load for a 2-ply thread
   double max_g = 250.0;          ///< highest load for a 2-ply thread
   bool scale_with_plies = true;  ///< loads times plies / 2 (paper 002: 20-250, 40-500, 60-750 g)
-  int cycles = 8;                ///< damped oscillation cycles
-  int steps_per_half = 8;        ///< readings per half cycle
-  int minor_loops = 3;           ///< random minor loops, each run twice, after the damped part
+  /// damped: an oscillation whose amplitude falls to 15 % over the cycles (paper 002);
+  /// repeated: full cycles min -> max -> min of constant amplitude (paper 001's training cycles).
+  std::string shape = "damped";
+  int cycles = 8;          ///< oscillation cycles
+  int steps_per_half = 8;  ///< readings per half cycle
+  int minor_loops = 3;     ///< random minor loops, each run twice, after the damped part
+  /// Each minor loop is also run a second time after a different history (down from a lower
+  /// turning point reached from the minimum load): loops between the same extrema from
+  /// different histories, the only place congruency can be tested.
+  bool congruency = false;
+  /// Readings per hold: 1 reads once at the end of each hold; k > 1 reads k times, equally
+  /// spaced in time, during each hold (what shows a response still moving).
+  int readings_per_hold = 1;
   double dwell_s = 180.0;        ///< hold before each reading (paper 002: 3 min)
   /// 0: every hold lasts dwell_s. s > 0: each hold drawn log-uniformly in
   /// [dwell_s / (1 + s), dwell_s (1 + s)] (protocols that vary the dwell expose creep).
@@ -52,12 +62,15 @@ struct LoadProtocol {
 /// Voltage tests at several constant loads (paper 000: 8 loads 294-980 mN, damped voltage
 /// oscillation 0-5.1 V, 60 s dwell; paper 001: load switched 400 g -> 200 g).
 struct VoltageProtocol {
-  std::vector<double> loads_g = {30, 40, 50, 60, 70, 80, 90, 100};  ///< 294 ... 980 mN
+  /// 294 ... 980 mN, tested in this order (any order: a drift is separable from the load only
+  /// when the order is not monotone).
+  std::vector<double> loads_g = {30, 40, 50, 60, 70, 80, 90, 100};
   double v_max = 5.1;
   int cycles = 2;          ///< damped oscillation cycles per load
   int steps_per_half = 9;  ///< readings per half cycle
   double dwell_s = 60.0;
   double dwell_spread = 0.0;  ///< as LoadProtocol::dwell_spread
+  int readings_per_hold = 1;  ///< as LoadProtocol::readings_per_hold
   std::string truth =
       "gpi";  ///< H of the truth: gpi (paper 000's identified envelopes) or preisach
 };
