@@ -98,15 +98,15 @@ TEST(Rig, RepeatedCyclesAndCongruencyLoopsFollowTheirDefinition) {
     EXPECT_DOUBLE_EQ(loads[static_cast<std::size_t>(10 * c)], 20.0);
     EXPECT_DOUBLE_EQ(loads[static_cast<std::size_t>(10 * c + 5)], 250.0);
   }
-  // With congruency each minor loop a <-> b is run twice more after a different history, so
-  // the input reaches the loop's lower turning point a from two different maxima.
+  // With congruency each minor loop a <-> b is run twice more after a different history
+  // (from the minimum instead of from the maximum).
   s.protocol.minor_loops = 2;
   s.protocol.congruency = true;
   const std::vector<double> with = rig_load_protocol(s);
   s.protocol.congruency = false;
   const std::vector<double> without = rig_load_protocol(s);
-  // per loop: down to the minimum, up to c, then the loop twice (4 ramps), 5 readings each
-  EXPECT_EQ(with.size() - without.size(), 2u * (2 + 4) * 5);
+  // per loop: down to the minimum, then the loop twice (4 ramps), 5 readings each
+  EXPECT_EQ(with.size() - without.size(), 2u * (1 + 4) * 5);
   s.protocol.shape = "sawtooth";
   EXPECT_THROW(s.validate(), InvalidArgument);
 }

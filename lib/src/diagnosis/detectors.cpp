@@ -88,6 +88,12 @@ void centre_per_segment(const Record& rec, Eigen::MatrixXd& X) {
   }
 }
 
+// A model-free signature's verdict in words.
+std::string describe(const Signature& s) {
+  return fmt::format("{} differ by {:.3g} (z = {:.1f}, p = {:.2g}, {} comparisons)", s.what,
+                     s.estimate, s.z, s.p_value, s.units);
+}
+
 }  // namespace
 
 Context::Context(const Record& record, const Baseline& b, const DiagnoseOptions& o)
@@ -121,6 +127,9 @@ Context::Context(const Record& record, const Baseline& b, const DiagnoseOptions&
   const double q = quantisation_step(rec.y);
   floor = std::sqrt(white * white + q * q / 12.0);
   rms_before = 100.0 * rms(rs) / rec.range;
+  return_point = return_point_signatures(rec, floor);
+  congruency = congruency_signature(rec, floor);
+  holds = hold_signature(rec, floor);
 }
 
 std::vector<char> Context::train_mask(int fold) const {
@@ -233,7 +242,7 @@ Finding model_finding(Context& ctx, const std::string& effect, const std::string
 Finding detect_drift(Context& ctx) {
   const Record& rec = ctx.rec;
   const double t0 = rec.time.front(), t1 = std::max(rec.time.back(), t0 + 1e-300);
-  return feature_finding(
+  Finding f = feature_finding(
       ctx, "drift", "baseline + linear trend in time",
       [&](const FoldFit&) {
         Eigen::MatrixXd X(static_cast<Eigen::Index>(rec.size()), 1);
@@ -242,6 +251,13 @@ Finding detect_drift(Context& ctx) {
         return X;
       },
       "a linear trend in time");
+  const Signature& sig = ctx.return_point.time;
+  if (sig.available) {
+    f.evidence += "; " + describe(sig);
+    // Readings in the same state that drift apart with time are a drift whatever the model.
+    if (sig.p_value < ctx.opt.alpha && f.gain_pct > 0.0) f.detected = true;
+  }
+  return f;
 }
 
 Finding detect_creep(Context& ctx) {
@@ -301,6 +317,11 @@ Finding detect_creep(Context& ctx) {
       },
       "the response lags its rate-independent value with the readings' own timing");
   f.extended_model += " (per fold: " + chosen + ")";
+  if (ctx.holds.available) {
+    // Readings during holds answer directly: they move on in the step's direction or not.
+    f.evidence += "; " + describe(ctx.holds);
+    f.detected = ctx.holds.p_value < ctx.opt.alpha && f.gain_pct > 0.0;
+  }
   return f;
 }
 
@@ -363,6 +384,15 @@ Finding detect_lonely_stroke(Context& ctx) {
       "a term in the running maximum of the input since the last load change (first rise "
       "against later cycles)");
   f.extended_model += " (lambda per fold: " + chosen + ")";
+  // On one load record a first stroke that differs from later ones is also what any Preisach
+  // plane extending below the lowest tested input gives (the specimen's virgin loading before
+  // the record; PHYSICS.md section 4: the expanded plane), so the model-free offset is
+  // evidence only where it comes back after load changes (tests at several loads).
+  const Signature& sig = ctx.return_point.running_max;
+  if (sig.available) {
+    f.evidence += "; " + describe(sig);
+    if (rec.several_loads && sig.p_value < ctx.opt.alpha && f.gain_pct > 0.0) f.detected = true;
+  }
   return f;
 }
 
@@ -459,14 +489,19 @@ Finding detect_offset_nonlinearity(Context& ctx) {
 }
 
 Finding detect_noncongruence(Context& ctx) {
-  // Measured and withdrawn (docs/diagnose.md): a moving Preisach extension Gamma[u + a y],
-  // a chosen in-fold, gained as much held-out error on clean rig data as on non-congruent data
-  // (false alarms on 3 of 6 clean load tests, 0 of 6 non-congruent ones found), because a
-  // protocol without two minor loops between the same extrema reached from different
-  // histories cannot tell the two apart. No detector is claimed until one is.
-  return not_tested(ctx, "minor_loop_noncongruence",
-                    "not identifiable from these protocols: congruency needs minor loops between "
-                    "the same extrema reached from different histories (docs/diagnose.md)");
+  const Signature& sig = ctx.congruency;
+  if (!sig.available)
+    return not_tested(ctx, "minor_loop_noncongruence",
+                      "needs monotone branches from the same turning value after different "
+                      "histories (minor loops between the same extrema), which these data do not "
+                      "hold");
+  Finding f = not_tested(ctx, "minor_loop_noncongruence", describe(sig));
+  f.tested = true;
+  f.score = sig.z;
+  f.p_value = sig.p_value;
+  f.extended_model = "moving Preisach model Gamma[u + a y] (not fitted: gain not measured)";
+  f.detected = sig.p_value < ctx.opt.alpha;
+  return f;
 }
 
 Finding detect_outliers(Context& ctx) {

@@ -9,6 +9,7 @@
 
 #include "baseline.hpp"
 #include "scpkit/diagnosis/diagnose.hpp"
+#include "signatures.hpp"
 
 namespace scpkit::diagnosis {
 
@@ -23,6 +24,8 @@ struct Context {
   std::vector<std::vector<std::size_t>> blocks;  ///< consecutive scored rows, for the tests
   double floor = 0.0;                            ///< noise sigma (output units)
   double rms_before = 0.0;                       ///< % of range
+  ReturnPointSignatures return_point;            ///< model-free (signatures.hpp)
+  Signature congruency, holds;
   std::mt19937_64 rng;
 
   Context(const Record& r, const Baseline& b, const DiagnoseOptions& o);

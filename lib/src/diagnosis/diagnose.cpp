@@ -49,15 +49,21 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
                        [&](const Finding& f) { return f.effect == e && f.detected; });
   };
   const Finding* best = nullptr;
+  // Effects read off model-free signatures are named before those known only by a gain:
+  // readings moving during holds (creep) and history-dependent loop shapes explain return-point
+  // offsets too, so they come before the lonely stroke.
+  for (const char* e : {"outliers", "creep", "minor_loop_noncongruence", "lonely_stroke"}) {
+    for (const Finding& f : d.findings) {
+      if (!best && f.detected && f.effect == e) best = &f;
+    }
+  }
+  const Finding* by_gain = nullptr;
   for (const Finding& f : d.findings) {
     if (!f.detected) continue;
-    if (f.effect == "outliers") {
-      best = &f;
-      break;
-    }
     if (f.effect == "offset_nonlinearity" && detected("lonely_stroke")) continue;
-    if (!best || f.gain_pct > best->gain_pct) best = &f;
+    if (!by_gain || f.gain_pct > by_gain->gain_pct) by_gain = &f;
   }
+  if (!best) best = by_gain;
   if (best) {
     d.cause = best->effect;
   } else {

@@ -99,9 +99,8 @@ RigSpec load_rig_spec(const std::filesystem::path& path) {
   s.test = r.text(root, "test", s.test);
   s.specimen = r.text(root, "specimen", s.specimen);
   if (const toml::table* v = r.table(root, "voltage")) {
-    r.only_keys(
-        *v, {"loads_g", "v_max", "cycles", "steps_per_half", "dwell_s", "dwell_spread",
-             "readings_per_hold", "truth"});
+    r.only_keys(*v, {"loads_g", "v_max", "cycles", "steps_per_half", "dwell_s", "dwell_spread",
+                     "readings_per_hold", "truth"});
     VoltageProtocol& q = s.voltage;
     if (const toml::node* n = v->get("loads_g")) {
       const toml::array* a = n->as_array();
@@ -245,7 +244,8 @@ std::vector<double> rig_load_protocol(const RigSpec& spec) {
     }
   }
   // Minor loops, each traversed twice, inside the range: after a common maximum, and (with
-  // `congruency`) once more after a lower turning point c reached from the minimum.
+  // `congruency`) once more after the minimum (the loop's upper turning point b then reached
+  // from below, so the two runs of the loop start from different memories).
   std::mt19937_64 rng(spec.seed * 7919 + 17);
   std::uniform_real_distribution<double> U(0.0, 1.0);
   for (int m = 0; m < p.minor_loops; ++m) {
@@ -261,7 +261,6 @@ std::vector<double> rig_load_protocol(const RigSpec& spec) {
     loop();
     if (p.congruency) {
       ramp(lo);
-      ramp(b + 0.5 * (hi - b));
       loop();
     }
   }
@@ -301,9 +300,8 @@ RigRun run_rig(const RigSpec& spec, const Material& material) {
   const double y_range = f_range / (material.tensile_modulus_Pa.value * material.ply_area_m2());
   const RigEffects& e = spec.effects;
 
-  const std::vector<double> dwell =
-      detail::dwell_times(loads_g.size(), spec.protocol.dwell_s, spec.protocol.dwell_spread,
-                          spec.seed);
+  const std::vector<double> dwell = detail::dwell_times(loads_g.size(), spec.protocol.dwell_s,
+                                                        spec.protocol.dwell_spread, spec.seed);
   const detail::Readings readings =
       detail::readings_during_holds(dwell, spec.protocol.readings_per_hold);
   const std::size_t n = readings.step.size();

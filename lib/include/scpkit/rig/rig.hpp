@@ -46,14 +46,14 @@ struct LoadProtocol {
   int cycles = 8;          ///< oscillation cycles
   int steps_per_half = 8;  ///< readings per half cycle
   int minor_loops = 3;     ///< random minor loops, each run twice, after the damped part
-  /// Each minor loop is also run a second time after a different history (down from a lower
-  /// turning point reached from the minimum load): loops between the same extrema from
-  /// different histories, the only place congruency can be tested.
+  /// Each minor loop a <-> b is also run after a different history (from the minimum load, so
+  /// b is first reached from below instead of after the maximum): loops between the same
+  /// extrema from different histories, the only place congruency can be tested.
   bool congruency = false;
   /// Readings per hold: 1 reads once at the end of each hold; k > 1 reads k times, equally
   /// spaced in time, during each hold (what shows a response still moving).
   int readings_per_hold = 1;
-  double dwell_s = 180.0;        ///< hold before each reading (paper 002: 3 min)
+  double dwell_s = 180.0;  ///< hold before each reading (paper 002: 3 min)
   /// 0: every hold lasts dwell_s. s > 0: each hold drawn log-uniformly in
   /// [dwell_s / (1 + s), dwell_s (1 + s)] (protocols that vary the dwell expose creep).
   double dwell_spread = 0.0;

@@ -1,0 +1,285 @@
+#include "signatures.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "scpkit/hysteresis/preisach.hpp"
+
+namespace scpkit::diagnosis {
+namespace {
+
+double normal_two_sided(double z) { return std::erfc(std::abs(z) / std::sqrt(2.0)); }
+double normal_upper(double z) { return 0.5 * std::erfc(z / std::sqrt(2.0)); }
+
+// Upper tail of chi-square with k degrees of freedom (Wilson-Hilferty).
+double chi_square_upper(double x, int k) {
+  if (k <= 0) return 1.0;
+  const double kk = static_cast<double>(k);
+  const double z = (std::cbrt(x / kk) - (1.0 - 2.0 / (9.0 * kk))) / std::sqrt(2.0 / (9.0 * kk));
+  return normal_upper(z);
+}
+
+// What the signatures share: the readings with each hold collapsed to its last reading (the
+// closest to the rate-independent value), the memory state after each of them, and the
+// running maximum of the input since the segment started.
+struct Walk {
+  std::vector<std::size_t> idx;        // collapsed readings (row numbers)
+  std::vector<std::vector<long>> key;  // memory state, rounded
+  std::vector<double> running_max;     // since the segment's start
+  std::vector<double> previous;        // the dominant extremum before the current input
+  double lo = 0.0, span = 1.0, duration = 1.0;
+};
+
+Walk walk(const Record& rec) {
+  Walk w;
+  const auto [umin, umax] = std::minmax_element(rec.u.begin(), rec.u.end());
+  w.lo = *umin;
+  w.span = std::max(*umax - *umin, 1e-300);
+  w.duration = std::max(rec.time.back() - rec.time.front(), 1e-300);
+  const double tol = 1e-9 * w.span;
+  const PreisachGrid grid{*umin, *umin + w.span, 1};
+  PreisachState state = PreisachState::negative_saturation(grid);
+  double M = 0.0;
+  for (std::size_t t = 0; t < rec.size(); ++t) {
+    const bool start = t == 0 || rec.seg[t] != rec.seg[t - 1];
+    if (start) {
+      state = PreisachState::negative_saturation(grid);
+      M = rec.u[t];
+    }
+    state.apply(rec.u[t]);
+    M = std::max(M, rec.u[t]);
+    const bool held_on = t + 1 < rec.size() && rec.seg[t + 1] == rec.seg[t] &&
+                         std::abs(rec.u[t + 1] - rec.u[t]) <= tol;
+    if (held_on) continue;
+    std::vector<long> k{rec.seg[t]};
+    const auto tp = state.turning_points();
+    if (std::abs(rec.u[t] - w.lo) <= tol) {
+      k.push_back(0);  // back at the lowest input: every hysteron off, whatever came before
+    } else {
+      for (double p : tp) k.push_back(std::lround((p - w.lo) / w.span * 1e7));
+    }
+    w.idx.push_back(t);
+    w.previous.push_back(tp.size() >= 2 ? tp[tp.size() - 2] : w.lo);
+    w.key.push_back(std::move(k));
+    w.running_max.push_back(M);
+  }
+  return w;
+}
+
+// Least squares d ~ X (no intercept) with coefficient tests; the residual variance is not
+// taken below `var_floor` (the noise of a difference of two readings).
+std::vector<Signature> regress(const Eigen::MatrixXd& X, const Eigen::VectorXd& d,
+                               double var_floor) {
+  std::vector<Signature> out(static_cast<std::size_t>(X.cols()));
+  const Eigen::Index n = X.rows(), m = X.cols();
+  if (n < m + 3) return out;
+  const Eigen::MatrixXd XtX = X.transpose() * X;
+  Eigen::LDLT<Eigen::MatrixXd> ldlt(XtX);
+  if (ldlt.info() != Eigen::Success) return out;
+  const Eigen::VectorXd beta = ldlt.solve(X.transpose() * d);
+  const Eigen::VectorXd e = d - X * beta;
+  const double var = std::max(e.squaredNorm() / static_cast<double>(n - m), var_floor);
+  const Eigen::MatrixXd cov = var * ldlt.solve(Eigen::MatrixXd::Identity(m, m));
+  for (Eigen::Index j = 0; j < m; ++j) {
+    Signature& s = out[static_cast<std::size_t>(j)];
+    // A feature that hardly varies, or is confounded with another, is not tested.
+    const double rel = XtX(j, j) > 0.0 ? cov(j, j) / var * XtX(j, j) : 1e300;
+    if (!(XtX(j, j) > 0.0) || rel > 25.0) continue;
+    s.available = true;
+    s.units = static_cast<int>(n);
+    s.estimate = beta[j];
+    s.z = beta[j] / std::sqrt(cov(j, j));
+    s.p_value = normal_two_sided(s.z);
+  }
+  return out;
+}
+
+}  // namespace
+
+ReturnPointSignatures return_point_signatures(const Record& rec, double sigma) {
+  const Walk w = walk(rec);
+  // Consecutive readings of one memory state (within a segment: across load segments the
+  // maps differ), the later against the earlier.
+  std::map<std::vector<long>, std::size_t> last;
+  std::vector<double> dm, dt, d;
+  for (std::size_t i = 0; i < w.idx.size(); ++i) {
+    const auto [it, fresh] = last.try_emplace(w.key[i], i);
+    if (fresh) continue;
+    const std::size_t j = it->second;
+    it->second = i;
+    const std::size_t a = w.idx[j], b = w.idx[i];
+    const auto s = static_cast<std::size_t>(rec.seg[b]);
+    // The lonely stroke's sign: + in the first segment and after a load decrease, - after an
+    // increase (as the lonely_stroke extension).
+    const double sign =
+        rec.several_loads && s > 0 && rec.seg_load[s] > rec.seg_load[s - 1] ? -1.0 : 1.0;
+    dm.push_back(sign * (w.running_max[i] - w.running_max[j]) / w.span);
+    dt.push_back((rec.time[b] - rec.time[a]) / w.duration);
+    d.push_back(rec.y[b] - rec.y[a]);
+  }
+  ReturnPointSignatures out;
+  const auto n = static_cast<Eigen::Index>(d.size());
+  Eigen::MatrixXd X(n, 2);
+  Eigen::VectorXd y(n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    X(k, 0) = dm[static_cast<std::size_t>(k)];
+    X(k, 1) = dt[static_cast<std::size_t>(k)];
+    y[k] = d[static_cast<std::size_t>(k)];
+  }
+  const std::vector<Signature> s = regress(X, y, 2.0 * sigma * sigma);
+  out.running_max = s[0];
+  out.time = s[1];
+  out.running_max.what =
+      "readings in the same memory state, before and after the running "
+      "maximum of the input grew";
+  out.time.what = "readings in the same memory state, apart in time";
+  return out;
+}
+
+Signature congruency_signature(const Record& rec, double sigma) {
+  const Walk w = walk(rec);
+  const double tol = 1e-6 * w.span;
+  // Monotone branches on the collapsed readings: [first, last] positions in w.idx, the first
+  // being a turning reading.
+  struct Branch {
+    std::size_t first, last;
+    int dir;
+  };
+  std::vector<Branch> branches;
+  for (std::size_t i = 0; i + 1 < w.idx.size();) {
+    const std::size_t a = w.idx[i], b = w.idx[i + 1];
+    if (rec.seg[a] != rec.seg[b]) {
+      ++i;
+      continue;
+    }
+    const int dir = rec.u[b] > rec.u[a] ? 1 : -1;
+    std::size_t j = i + 1;
+    while (j + 1 < w.idx.size() && rec.seg[w.idx[j + 1]] == rec.seg[a] &&
+           (rec.u[w.idx[j + 1]] - rec.u[w.idx[j]]) * dir > 0.0)
+      ++j;
+    // Branches on which the running maximum grows are virgin curves, not minor-loop branches.
+    if (w.running_max[j] == w.running_max[i]) branches.push_back({i, j, dir});
+    i = j;
+  }
+  // Per pair the slope of d against the distance travelled along the branch; the scatter of d
+  // about those lines, pooled over the pairs, is the yardstick (sensor noise and quantisation
+  // as they are in these data, whatever the noise model).
+  struct Slope {
+    double slope, sxx;
+  };
+  std::vector<Slope> slopes;
+  double sse = 0.0;
+  int dof = 0;
+  for (std::size_t q = 0; q < branches.size(); ++q) {
+    const Branch& B = branches[q];
+    const std::size_t bs = w.idx[B.first];
+    // The latest earlier branch of this segment and direction from the same turning value,
+    // in a different memory state.
+    const Branch* A = nullptr;
+    for (std::size_t p = q; p-- > 0;) {
+      const Branch& c = branches[p];
+      const std::size_t cs = w.idx[c.first];
+      if (c.dir == B.dir && rec.seg[cs] == rec.seg[bs] && std::abs(rec.u[cs] - rec.u[bs]) <= tol &&
+          w.key[c.first] != w.key[B.first]) {
+        A = &c;
+        break;
+      }
+    }
+    if (!A) continue;
+    // Congruency holds between the same extrema: down (up) to the higher (lower) of the two
+    // branches' previous turning points, beyond which older memory is wiped out differently.
+    const double stop = B.dir < 0 ? std::max(w.previous[A->first], w.previous[B.first])
+                                  : std::min(w.previous[A->first], w.previous[B.first]);
+    // d(u) = y_B(u) - y_A(u) along the common part of the two branches (A interpolated).
+    std::vector<double> x, d;
+    for (std::size_t i = B.first; i <= B.last; ++i) {
+      const std::size_t t = w.idx[i];
+      const double u = rec.u[t];
+      if ((u - stop) * B.dir > tol) break;
+      for (std::size_t k = A->first; k < A->last; ++k) {
+        const std::size_t t0 = w.idx[k], t1 = w.idx[k + 1];
+        const double u0 = rec.u[t0], u1 = rec.u[t1];
+        if ((u - u0) * B.dir < -tol || (u1 - u) * B.dir < -tol) continue;
+        const double f = std::abs(u1 - u0) > 0.0 ? (u - u0) / (u1 - u0) : 0.0;
+        x.push_back(std::abs(u - rec.u[bs]) / w.span);
+        d.push_back(rec.y[t] - ((1.0 - f) * rec.y[t0] + f * rec.y[t1]));
+        break;
+      }
+    }
+    if (x.size() < 4) continue;
+    const auto n = static_cast<Eigen::Index>(x.size());
+    const Eigen::Map<const Eigen::VectorXd> X(x.data(), n), D(d.data(), n);
+    const double xm = X.mean(), dmn = D.mean();
+    const double sxx = (X.array() - xm).square().sum();
+    if (!(sxx > 0.0)) continue;
+    const double slope = ((X.array() - xm) * (D.array() - dmn)).sum() / sxx;
+    sse += ((D.array() - dmn) - slope * (X.array() - xm)).square().sum();
+    dof += static_cast<int>(n) - 2;
+    slopes.push_back({slope, sxx});
+  }
+  Signature s;
+  s.what = "monotone branches from the same turning value after different histories";
+  if (slopes.empty() || dof < 8) return s;
+  const double var = std::max(sse / dof, 2.0 * sigma * sigma * 1e-4);
+  double chi2 = 0.0;
+  for (const Slope& k : slopes) chi2 += k.slope * k.slope * k.sxx / var;
+  const int units = static_cast<int>(slopes.size());
+  s.available = true;
+  s.units = units;
+  s.estimate = std::sqrt(chi2 / units);
+  s.z = s.estimate;
+  s.p_value = chi_square_upper(chi2, units);
+  return s;
+}
+
+Signature hold_signature(const Record& rec, double sigma) {
+  const auto [umin, umax] = std::minmax_element(rec.u.begin(), rec.u.end());
+  const double utol = 1e-9 * std::max(*umax - *umin, 1e-300);
+  // The response's direction: the sign of sum(du dy) over the input steps.
+  double cross = 0.0;
+  for (std::size_t t = 1; t < rec.size(); ++t) {
+    if (rec.seg[t] == rec.seg[t - 1])
+      cross += (rec.u[t] - rec.u[t - 1]) * (rec.y[t] - rec.y[t - 1]);
+  }
+  const double dir = cross >= 0.0 ? 1.0 : -1.0;
+  std::vector<double> s, dt, m;
+  for (std::size_t t = 1; t < rec.size();) {
+    const bool step = rec.seg[t] == rec.seg[t - 1] && std::abs(rec.u[t] - rec.u[t - 1]) > utol;
+    if (!step) {
+      ++t;
+      continue;
+    }
+    std::size_t e = t;
+    while (e + 1 < rec.size() && rec.seg[e + 1] == rec.seg[t] &&
+           std::abs(rec.u[e + 1] - rec.u[t]) <= utol)
+      ++e;
+    if (e > t) {
+      s.push_back(dir * (rec.u[t] > rec.u[t - 1] ? 1.0 : -1.0));
+      dt.push_back(rec.time[e] - rec.time[t]);
+      m.push_back(rec.y[e] - rec.y[t]);
+    }
+    t = e + 1;
+  }
+  Signature out;
+  out.what = "readings during holds, in the direction of the last input step";
+  const auto n = static_cast<Eigen::Index>(m.size());
+  if (n < 8) return out;
+  const double dt_max = std::max(*std::max_element(dt.begin(), dt.end()), 1e-300);
+  Eigen::MatrixXd X(n, 2);
+  Eigen::VectorXd y(n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    X(k, 0) = s[i];
+    X(k, 1) = dt[i] / dt_max;  // a drift moves held readings whatever the step's direction
+    y[k] = m[i];
+  }
+  Signature r = regress(X, y, 2.0 * sigma * sigma)[0];
+  if (!r.available) return out;
+  r.what = out.what;
+  r.p_value = normal_upper(r.z);  // one-sided: creep continues the step
+  return r;
+}
+
+}  // namespace scpkit::diagnosis

@@ -1,0 +1,43 @@
+#pragma once
+// Private to diagnose: model-free signatures, tests of properties that every rate-independent
+// Preisach operator has whatever its density, read directly off the measurements. They need no
+// fitted model, so the baseline's own approximation error cannot raise them.
+//
+// - Return-point memory: two readings whose inputs left the operator in the same memory state
+//   (same dominant turning points, same input) must read the same. Their difference, regressed
+//   on the growth of the running input maximum between them and on the time between them,
+//   separates a lonely stroke (the first stroke differs from later ones) from a drift.
+// - Congruency: two monotone branches that start from the same turning value go through the
+//   same output increments, whatever came before. A difference that grows along the branch
+//   is non-congruence (after differences in the running maximum are excluded).
+// - Holds: readings taken while the input is held still must not move; motion in the direction
+//   of the last input step is creep (a drift moves them regardless of that direction).
+#include <string>
+#include <vector>
+
+#include "baseline.hpp"
+
+namespace scpkit::diagnosis {
+
+/// A regression coefficient tested against zero.
+struct Signature {
+  bool available = false;  ///< the data hold what the test needs
+  int units = 0;           ///< independent comparisons it rests on (pairs, branches, holds)
+  double estimate = 0.0;   ///< effect size in output units (per unit of the feature)
+  double z = 0.0;          ///< estimate / standard error
+  double p_value = 1.0;    ///< two-sided unless stated
+  std::string what;        ///< one phrase: what was compared
+};
+
+struct ReturnPointSignatures {
+  Signature running_max;  ///< d ~ (growth of the running maximum): lonely stroke
+  Signature time;         ///< d ~ (time between the readings): drift
+};
+
+/// `sigma`: the noise of one reading (the diagnosis' floor).
+ReturnPointSignatures return_point_signatures(const Record& rec, double sigma);
+Signature congruency_signature(const Record& rec, double sigma);
+/// One-sided: motion during holds in the direction of the last input step.
+Signature hold_signature(const Record& rec, double sigma);
+
+}  // namespace scpkit::diagnosis
