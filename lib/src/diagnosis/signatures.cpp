@@ -6,6 +6,7 @@
 #include <map>
 
 #include "scpkit/hysteresis/preisach.hpp"
+#include "stats.hpp"
 
 namespace scpkit::diagnosis {
 namespace {
@@ -166,11 +167,10 @@ Signature congruency_signature(const Record& rec, double sigma) {
   // Per pair the slope of d against the distance travelled along the branch; the scatter of d
   // about those lines, pooled over the pairs, is the yardstick (sensor noise and quantisation
   // as they are in these data, whatever the noise model).
-  struct Slope {
-    double slope, sxx;
-  };
-  std::vector<Slope> slopes;
-  double sse = 0.0;
+  // Per pair, the part of d that changes along the branch (a line, or a parabola on six or
+  // more readings: loops may differ in height or in shape) as explained sum of squares.
+  double explained = 0.0, sse = 0.0;
+  int terms = 0, pairs = 0;
   int dof = 0;
   for (std::size_t q = 0; q < branches.size(); ++q) {
     const Branch& B = branches[q];
@@ -211,26 +211,33 @@ Signature congruency_signature(const Record& rec, double sigma) {
     if (x.size() < 4) continue;
     const auto n = static_cast<Eigen::Index>(x.size());
     const Eigen::Map<const Eigen::VectorXd> X(x.data(), n), D(d.data(), n);
-    const double xm = X.mean(), dmn = D.mean();
-    const double sxx = (X.array() - xm).square().sum();
-    if (!(sxx > 0.0)) continue;
-    const double slope = ((X.array() - xm) * (D.array() - dmn)).sum() / sxx;
-    sse += ((D.array() - dmn) - slope * (X.array() - xm)).square().sum();
-    dof += static_cast<int>(n) - 2;
-    slopes.push_back({slope, sxx});
+    const Eigen::Index degree = n >= 6 ? 2 : 1;
+    Eigen::MatrixXd V(n, degree + 1);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      for (Eigen::Index k = 0; k <= degree; ++k) V(i, k) = std::pow(X[i], static_cast<double>(k));
+    }
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(V);
+    if (qr.rank() < degree + 1) continue;
+    const Eigen::VectorXd fitted = V * qr.solve(D);
+    explained += (fitted.array() - D.mean()).square().sum();
+    sse += (D - fitted).squaredNorm();
+    dof += static_cast<int>(n - degree - 1);
+    terms += static_cast<int>(degree);
+    ++pairs;
   }
   Signature s;
   s.what = "monotone branches from the same turning value after different histories";
-  if (slopes.empty() || dof < 8) return s;
-  const double var = std::max(sse / dof, 2.0 * sigma * sigma * 1e-4);
-  double chi2 = 0.0;
-  for (const Slope& k : slopes) chi2 += k.slope * k.slope * k.sxx / var;
-  const int units = static_cast<int>(slopes.size());
+  if (pairs == 0 || dof < 8) return s;
+  // A quantised sensor resolves no difference below its step: the variance of a difference of
+  // two readings is taken no smaller than q^2 / 6 (both rounded independently).
+  const double q = quantisation_step(rec.y);
+  const double var = std::max({sse / dof, q * q / 6.0, 2.0 * sigma * sigma * 1e-4});
+  const double chi2 = explained / var;
   s.available = true;
-  s.units = units;
-  s.estimate = std::sqrt(chi2 / units);
+  s.units = pairs;
+  s.estimate = std::sqrt(chi2 / terms);
   s.z = s.estimate;
-  s.p_value = chi_square_upper(chi2, units);
+  s.p_value = chi_square_upper(chi2, terms);
   return s;
 }
 
