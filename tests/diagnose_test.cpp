@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <functional>
+
 #include "diagnose_scenarios.hpp"
 #include "scpkit/error.hpp"
 #include "test_support.hpp"
@@ -15,18 +17,25 @@ namespace {
 
 using testing::make_scenario;
 
+using Adjust = std::function<void(RigSpec&)>;
+
 void expect_named(const std::string& side, const std::string& effect,
-                  const std::vector<int>& indices) {
+                  const std::vector<int>& indices, const Adjust& adjust = {}) {
   for (int i : indices) {
-    const testing::Scenario s = make_scenario(side, effect, i);
+    testing::Scenario s = make_scenario(side, effect, i);
+    if (adjust) adjust(s.spec);
     const Diagnosis d = testing::diagnose_scenario(s);
-    EXPECT_EQ(d.cause, effect) << s.describe();
+    std::string why;
+    for (const Finding& f : d.findings) why += "\n  " + f.effect + ": " + f.evidence;
+    EXPECT_EQ(d.cause, effect) << s.describe() << why;
     for (const Finding& f : d.findings) {
       EXPECT_GT(f.heldout_rms_before, 0.0) << f.effect;
       if (!f.tested) {
         EXPECT_FALSE(f.detected) << f.effect;
       }
-      if (f.detected) {
+      // A detected effect's extension gains on held-out data (where an extension is fitted:
+      // the moving Preisach model for non-congruence is not, docs/diagnose.md).
+      if (f.detected && f.effect != "minor_loop_noncongruence") {
         EXPECT_LT(f.heldout_rms_after, f.heldout_rms_before) << f.effect;
       }
     }
@@ -38,6 +47,34 @@ TEST(Diagnose, LoadTestsCleanDriftOutliersCreep) {
   expect_named("load", "drift", {1, 2});
   expect_named("load", "outliers", {0, 1});
   expect_named("load", "creep", {2});  // the largest creep level; the rest: the confusion matrix
+}
+
+// Readings during holds and loops between the same extrema from two histories give the
+// model-free signatures something to test; on clean data they must still find nothing.
+TEST(Diagnose, CleanDataWithHoldReadingsAndCongruencyLoopsIsNone) {
+  expect_named("load", "none", {3, 4}, [](RigSpec& r) {
+    r.protocol.readings_per_hold = 3;
+    r.protocol.congruency = true;
+  });
+}
+
+// Creep read during holds: the readings move on in the direction of the last step. Found at
+// every magnitude (10-40 % of the strain viscous), noise level and hold pattern drawn.
+TEST(Diagnose, CreepSeenDuringHolds) {
+  expect_named("load", "creep", {0, 1, 3}, [](RigSpec& r) { r.protocol.readings_per_hold = 3; });
+  expect_named("voltage", "creep", {1}, [](RigSpec& r) { r.voltage.readings_per_hold = 3; });
+}
+
+// Non-congruent minor loops (moving Preisach truth) between the same extrema from two
+// histories, read by a sensor that resolves the difference (0.004 mm steps): the congruency
+// signature names them on repeated-cycle protocols (indices 1 and 4). On the damped protocol
+// (indices 2 and 5) the loops' two histories differ too little and it is missed (named
+// `unexplained` and `outliers`): docs/diagnose.md, the confusion matrix.
+TEST(Diagnose, NoncongruenceFoundWhereTheSensorResolvesIt) {
+  expect_named("load", "minor_loop_noncongruence", {1, 4}, [](RigSpec& r) {
+    r.resolution_mm = 0.004;
+    r.noise_mm = 0.005;
+  });
 }
 
 TEST(Diagnose, VoltageTestsCleanKneeLonelyStroke) {

@@ -260,7 +260,11 @@ Finding detect_drift(Context& ctx) {
   return f;
 }
 
-Finding detect_creep(Context& ctx) {
+namespace {
+
+// Creep without readings during holds: the model seen through a Kelvin element in the
+// readings' own time (the lag behind each step, and how it changes with the hold times).
+Finding kelvin_creep(Context& ctx) {
   const Record& rec = ctx.rec;
   std::vector<double> dt;
   for (std::size_t t = 1; t < rec.size(); ++t) {
@@ -317,11 +321,51 @@ Finding detect_creep(Context& ctx) {
       },
       "the response lags its rate-independent value with the readings' own timing");
   f.extended_model += " (per fold: " + chosen + ")";
-  if (ctx.holds.available) {
-    // Readings during holds answer directly: they move on in the step's direction or not.
-    f.evidence += "; " + describe(ctx.holds);
-    f.detected = ctx.holds.p_value < ctx.opt.alpha && f.gain_pct > 0.0;
+  return f;
+}
+
+}  // namespace
+
+Finding detect_creep(Context& ctx) {
+  if (!ctx.holds.available) return kelvin_creep(ctx);
+  const Record& rec = ctx.rec;
+  // The time an input is held: the median time between input changes.
+  std::vector<double> holds;
+  double since = rec.time.front();
+  for (std::size_t t = 1; t < rec.size(); ++t) {
+    if (rec.u[t] != rec.u[t - 1]) {
+      if (rec.time[t] > since) holds.push_back(rec.time[t] - since);
+      since = rec.time[t];
+    }
   }
+  if (holds.empty()) return not_tested(ctx, "creep", "the readings carry no time");
+  const double hold = median(holds);
+  // Prony series driven by the model (PHYSICS.md section 5): for each time constant tau_k a
+  // Kelvin element v_k relaxing towards the rate-independent prediction p; the feature is the
+  // part not yet reached, p - v_k (restarted at each segment). Weights by least squares on
+  // each fold's training rows; tau_k = 0.3, 1 and 3 holds.
+  Finding f = feature_finding(
+      ctx, "creep", "baseline + Prony series (Kelvin elements, tau = 0.3, 1, 3 holds)",
+      [&](const FoldFit& fit) {
+        const double taus[] = {0.3 * hold, hold, 3.0 * hold};
+        Eigen::MatrixXd X(static_cast<Eigen::Index>(rec.size()), 3);
+        for (Eigen::Index k = 0; k < 3; ++k) {
+          double v = 0.0;
+          for (std::size_t t = 0; t < rec.size(); ++t) {
+            const bool start = t == 0 || rec.seg[t] != rec.seg[t - 1];
+            const double p = fit.pred[t];
+            v = start ? p
+                      : p + (v - p) *
+                                std::exp(-std::max(rec.time[t] - rec.time[t - 1], 0.0) / taus[k]);
+            X(static_cast<Eigen::Index>(t), k) = p - v;
+          }
+        }
+        return X;
+      },
+      "the lag of the response behind its rate-independent value (Kelvin elements)");
+  // Readings during holds answer directly: they move on in the step's direction or not.
+  f.evidence += "; " + describe(ctx.holds);
+  f.detected = ctx.holds.p_value < ctx.opt.alpha && f.gain_pct > 0.0;
   return f;
 }
 
