@@ -6,11 +6,14 @@
 #include "commands.hpp"
 #include "common.hpp"
 #include "scpkit/diagnosis/diagnose.hpp"
+#include "scpkit/diagnosis/ply_mapping_diagnosis.hpp"
+#include "scpkit/mechanics/material.hpp"
 
 namespace scpkit::cli {
 namespace {
 
-constexpr const char* kUsage = "scpkit diagnose DATA.csv [--json] [--seed N]";
+constexpr const char* kUsage =
+    "scpkit diagnose DATA.csv [--json] [--seed N] [--coil-d MM --coil-D MM --coil-n N --legs K]";
 constexpr const char* kAbout =
     "Fits the baseline (a Preisach model) with held-out validation over whole cycles or the\n"
     "segment column, estimates the noise floor from the data, tests one signature per named\n"
@@ -20,7 +23,108 @@ constexpr const char* kAbout =
     "Load tests: Preisach baseline held out by cycles. Tests at several constant loads\n"
     "(voltage, power or temperature input with a varying load column): augmented Preisach\n"
     "baseline held out by load segment. Method and measured accuracy: docs/diagnose.md.\n"
+    "A paired file (thread_strain_pct and scp_strain_pct under one load sequence) gets the\n"
+    "ply-mapping diagnosis instead: the SCP gain predicted from the material card and the coil\n"
+    "(metadata coil_d_mm, coil_D_mm, coil_n, legs, or the flags) against the measured one, and\n"
+    "the causes spring_index, legs, active_coils, input_scale scored on held-out cycles.\n"
     "--json prints the SPEC's object.";
+
+// The ply-mapping diagnosis of a paired thread/SCP test.
+int run_ply_mapping(const Measurement& m, const po::variables_map& vm) {
+  std::optional<CoilGeometry> coil = coil_from_metadata(m);
+  const int given = static_cast<int>(vm.count("coil-d") + vm.count("coil-D") + vm.count("coil-n"));
+  if (given > 0 && given < 3) throw UsageError("give all of --coil-d, --coil-D and --coil-n");
+  if (given == 3) {
+    CoilGeometry c;
+    c.wire_d_m = vm["coil-d"].as<double>() * 1e-3;
+    c.mean_D_m = vm["coil-D"].as<double>() * 1e-3;
+    c.coils = vm["coil-n"].as<double>();
+    c.legs = coil ? coil->legs : 1;
+    coil = c;
+  }
+  if (!coil) {
+    throw InputError(m.source(), 0, 0,
+                     "the ply-mapping diagnosis needs the SCP's coil: metadata coil_d_mm, "
+                     "coil_D_mm, coil_n (and legs), or --coil-d, --coil-D, --coil-n");
+  }
+  if (vm.count("legs")) coil->legs = vm["legs"].as<int>();
+  try {
+    coil->validate();
+  } catch (const InvalidArgument& e) {
+    throw UsageError(std::string("coil: ") + e.what());
+  }
+  const std::string material_id =
+      vm.count("material") ? vm["material"].as<std::string>() : m.meta("material").value_or("");
+  if (material_id.empty())
+    throw InputError(m.source(), 0, 0, "needs the material (metadata `material` or --material)");
+  const Material material = find_material(material_id);
+  const auto plies = m.meta_positive_int("plies");
+  const auto length = m.meta_number("length_mm");
+  if (!plies || !length)
+    throw InputError(m.source(), 0, 0, "needs `plies` and `length_mm` metadata");
+  PlyMappingData data;
+  data.load_N = select_input(m, "").values;
+  data.thread_strain = m.find(Quantity::kThreadStrain)->values;
+  data.scp_strain = m.find(Quantity::kScpStrain)->values;
+  data.plies = *plies;
+  data.length_m = *length * 1e-3;
+  data.coil = *coil;
+  const PlyMappingDiagnosis d = [&] {
+    try {
+      return diagnose_ply_mapping(data, material);
+    } catch (const IdentificationError& e) {
+      rethrow_at_column(m, m.find(Quantity::kScpStrain)->name,
+                        std::string("cannot diagnose: ") + e.what());
+    }
+  }();
+  const MappingCandidate& physics = d.candidates.front();
+  if (vm.count("json")) {
+    nlohmann::json findings = nlohmann::json::array();
+    for (std::size_t i = 1; i < d.candidates.size(); ++i) {
+      const MappingCandidate& c = d.candidates[i];
+      findings.push_back({{"effect", c.cause},
+                          {"tested", true},
+                          {"detected", c.supported},
+                          {"score", c.gain},
+                          {"evidence", c.evidence},
+                          {"extended_model", c.model},
+                          {"heldout_rms_before", physics.heldout_rms_pct},
+                          {"heldout_rms_after", c.heldout_rms_pct},
+                          {"gain_pct", c.gain_pct}});
+    }
+    print_json({{"input", select_input(m, "").column},
+                {"mode", "ply_mapping"},
+                {"baseline",
+                 {{"model", physics.model},
+                  {"heldout_by", "cycles"},
+                  {"rms_pct_range", physics.heldout_rms_pct},
+                  {"max_pct_range", physics.heldout_max_pct},
+                  {"predicted_gain", d.predicted_gain.value},
+                  {"predicted_gain_sigma", d.predicted_gain.sigma},
+                  {"measured_gain", d.measured_gain},
+                  {"measured_r2", d.measured_r2},
+                  {"miss_pct", d.miss_pct}}},
+                {"findings", findings},
+                {"cause", d.cause}});
+    return kOk;
+  }
+  std::cout << fmt::format(
+      "{}: ply mapping, {}-ply thread -> SCP (d {:g} mm, D {:g} mm, n {:g}, {} leg(s)), "
+      "{} folds of whole cycles\n",
+      m.source(), data.plies, data.coil.wire_d_m * 1e3, data.coil.mean_D_m * 1e3, data.coil.coils,
+      data.coil.legs, d.folds);
+  std::cout << fmt::format(
+      "  SCP gain: predicted {:.4g} +- {:.2g} (material card and coil), measured {:.4g} (R^2 "
+      "{:.5f}): {:+.1f} %\n",
+      d.predicted_gain.value, d.predicted_gain.sigma, d.measured_gain, d.measured_r2, d.miss_pct);
+  for (const MappingCandidate& c : d.candidates) {
+    std::cout << fmt::format(
+        "  {:<13} g {:8.4g}  held-out E_RMS {:7.3f} % of range  gain {:+6.1f} %{}  {}\n", c.cause,
+        c.gain, c.heldout_rms_pct, c.gain_pct, c.supported ? "  SUPPORTED" : "", c.evidence);
+  }
+  std::cout << "  cause: " << d.cause << "\n";
+  return kOk;
+}
 
 }  // namespace
 
@@ -29,10 +133,17 @@ int run_diagnose(const std::vector<std::string>& args) {
   opt.add_options()("help,h", "show this help")(
       "input", po::value<std::string>()->default_value(""), "input when several vary")(
       "seed", po::value<long long>()->default_value(1), "seed of the permutation tests")(
-      "json", "print one JSON object");
+      "json", "print one JSON object")("coil-d", po::value<double>(),
+                                       "ply mapping: SCP wire diameter d, mm")(
+      "coil-D", po::value<double>(), "ply mapping: SCP MEAN coil diameter D, mm")(
+      "coil-n", po::value<double>(), "ply mapping: SCP coils n (whole actuator)")(
+      "legs", po::value<int>(), "ply mapping: SCP legs (1, or 2 double-backed)")(
+      "material", po::value<std::string>(), "ply mapping: material card id");
   po::variables_map vm;
   if (!parse_command_line(args, kUsage, kAbout, opt, {"DATA"}, vm)) return kOk;
   const Measurement m = Measurement::read(vm["DATA"].as<std::string>());
+  if (m.find(Quantity::kThreadStrain) && m.find(Quantity::kScpStrain))
+    return run_ply_mapping(m, vm);
   const MeasurementColumn* drive = augmented_drive(m, vm["input"].as<std::string>());
   const Signal in =
       drive ? select_input(m, drive->name) : select_input(m, vm["input"].as<std::string>());

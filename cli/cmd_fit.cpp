@@ -29,28 +29,6 @@ constexpr const char* kAbout =
     "cross-validation on held-out blocks (the `segment` column, else whole cycles).\n"
     "Writes the model as JSON and prints the identification errors (E_max, E_RMS in % of\n"
     "the response range; mean |e| and its sigma in the response's units).";
-
-std::optional<CoilGeometry> coil_from_metadata(const Measurement& m) {
-  const auto d = m.meta_number("coil_d_mm"), D = m.meta_number("coil_D_mm"),
-             n = m.meta_number("coil_n");
-  if (!d && !D && !n) return std::nullopt;
-  if (!d || !D || !n) {
-    throw InputError(m.source(), 0, 0,
-                     "coil metadata needs all of coil_d_mm, coil_D_mm and coil_n");
-  }
-  CoilGeometry c;
-  c.wire_d_m = *d * 1e-3;
-  c.mean_D_m = *D * 1e-3;
-  c.coils = *n;
-  c.legs = m.meta_positive_int("legs").value_or(1);
-  try {
-    c.validate();
-  } catch (const InvalidArgument& e) {
-    throw InputError(m.source(), 0, 0, std::string("coil metadata: ") + e.what());
-  }
-  return c;
-}
-
 }  // namespace
 
 int run_fit(const std::vector<std::string>& args) {

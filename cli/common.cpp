@@ -139,4 +139,25 @@ void rethrow_at_column(const Measurement& m, const std::string& column,
   throw InputError(m.source(), m.header_line(), 0, message);
 }
 
+std::optional<CoilGeometry> coil_from_metadata(const Measurement& m) {
+  const auto d = m.meta_number("coil_d_mm"), D = m.meta_number("coil_D_mm"),
+             n = m.meta_number("coil_n");
+  if (!d && !D && !n) return std::nullopt;
+  if (!d || !D || !n) {
+    throw InputError(m.source(), 0, 0,
+                     "coil metadata needs all of coil_d_mm, coil_D_mm and coil_n");
+  }
+  CoilGeometry c;
+  c.wire_d_m = *d * 1e-3;
+  c.mean_D_m = *D * 1e-3;
+  c.coils = *n;
+  c.legs = m.meta_positive_int("legs").value_or(1);
+  try {
+    c.validate();
+  } catch (const InvalidArgument& e) {
+    throw InputError(m.source(), 0, 0, std::string("coil metadata: ") + e.what());
+  }
+  return c;
+}
+
 }  // namespace scpkit::cli

@@ -8,6 +8,7 @@
 #include "scpkit/error.hpp"
 #include "scpkit/io/measurement.hpp"
 #include "scpkit/io/model_file.hpp"
+#include "scpkit/mechanics/coil.hpp"
 #include "scpkit/metrics.hpp"
 
 namespace scpkit::cli {
@@ -77,6 +78,10 @@ struct ModelInputs {
 const MeasurementColumn* augmented_drive(const Measurement& m, const std::string& wanted_input);
 
 ModelInputs model_inputs(const Measurement& m, const ModelFile& mf);
+
+/// The coil of the file's metadata (coil_d_mm, coil_D_mm, coil_n, legs; legs default 1), or
+/// nullopt when it gives none. InputError when it gives part of one or an impossible one.
+std::optional<CoilGeometry> coil_from_metadata(const Measurement& m);
 
 /// IdentificationError -> InputError located at a column of the data file.
 [[noreturn]] void rethrow_at_column(const Measurement& m, const std::string& column,

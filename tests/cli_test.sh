@@ -160,6 +160,11 @@ fi
 # Voltage tests at several loads: the augmented baseline, held out by load segment; clean data.
 check "diagnose voltage tests (clean) names none" 0 '"cause": "none"' -- "$bin" diagnose "$src/examples/data/voltage-8loads.csv" --json
 check "diagnose voltage tests: augmented baseline by load segment" 0 "held out by load segments" -- "$bin" diagnose "$src/examples/data/voltage-8loads.csv"
+# A paired thread/SCP test: the ply-mapping diagnosis (prediction from card and coil).
+check "diagnose pair file: ply mapping, faithful rig file names none" 0 '"cause": "none"' -- "$bin" diagnose "$ex/pair-4ply.csv" --json
+check "diagnose pair file: legs override changes the verdict" 0 '"cause": "legs"' -- "$bin" diagnose "$ex/pair-4ply.csv" --json --legs 1
+check "diagnose pair file: report" 0 "SCP gain: predicted 13.59" -- "$bin" diagnose "$ex/pair-4ply.csv"
+check "diagnose pair file: half a coil is a usage error" 2 "give all of --coil-d" -- "$bin" diagnose "$ex/pair-4ply.csv" --coil-d 0.3
 
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]
