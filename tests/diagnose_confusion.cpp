@@ -20,7 +20,7 @@
 int main(int argc, char** argv) {
   using namespace scpkit;
   int cases = 12, offset = 0;
-  std::string out, only_side;
+  std::string out, only_side, only_effect;
   bool verbose = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -32,6 +32,8 @@ int main(int argc, char** argv) {
       out = argv[++i];
     else if (a == "--side" && i + 1 < argc)
       only_side = argv[++i];
+    else if (a == "--effect" && i + 1 < argc)
+      only_effect = argv[++i];
     else if (a == "-v")
       verbose = true;
     else if (a == "--show" && i + 3 < argc) {
@@ -47,6 +49,7 @@ int main(int argc, char** argv) {
       return 0;
     } else {
       std::cerr << "usage: diagnose_confusion [--cases N] [--offset K] [--side load|voltage] "
+                   "[--effect NAME] "
                    "[--out FILE.md] [-v]\n";
       return 2;
     }
@@ -74,6 +77,7 @@ int main(int argc, char** argv) {
     // Every scenario of this side, diagnosed on all cores (each diagnosis is independent).
     std::vector<testing::Scenario> todo;
     for (const std::string& effect : effects) {
+      if (!only_effect.empty() && effect != only_effect) continue;
       for (int i = offset; i < offset + cases; ++i)
         todo.push_back(testing::make_scenario(side, effect, i));
     }

@@ -1,6 +1,7 @@
 #include "diagnose_scenarios.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <array>
