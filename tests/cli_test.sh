@@ -39,7 +39,7 @@ check "help" 0 "commands:" -- "$bin" --help
 check "no args is a usage error" 2 "usage: scpkit" -- "$bin"
 check "version" 0 "^scpkit [0-9]+\.[0-9]+\.[0-9]+" -- "$bin" --version
 check "unknown command" 2 "unknown command 'frobnicate'" -- "$bin" frobnicate
-for c in fit predict map simulate; do
+for c in fit predict map simulate diagnose; do
   check "$c --help" 0 "usage: scpkit $c" -- "$bin" "$c" --help
 done
 check "unknown option" 2 "unrecognised option|unrecognized option" -- "$bin" fit "$ex/pair-2ply.csv" --bogus
