@@ -688,12 +688,18 @@ Finding detect_outliers(Context& ctx) {
   const double r_med = median(level), r_scale = std::max({mad(level), ctx.floor, 1e-300});
   std::vector<char> flagged(n, 0);
   int count = 0;
+  // The nearest different input before and after each reading (readings during a hold share
+  // their input): a reading at a turning value has both on the same side.
+  std::vector<double> prev_u(n, std::numeric_limits<double>::quiet_NaN()), next_u(prev_u);
+  for (std::size_t t = 1; t < n; ++t)
+    prev_u[t] = rec.u[t - 1] != rec.u[t] ? rec.u[t - 1] : prev_u[t - 1];
+  for (std::size_t t = n - 1; t-- > 0;)
+    next_u[t] = rec.u[t + 1] != rec.u[t] ? rec.u[t + 1] : next_u[t + 1];
   double zmax = 0.0;
   for (std::size_t i = 0; i < ctx.scored.size(); ++i) {
     const std::size_t t = ctx.scored[i];
     // Input reversals are left out: the model's error may legitimately kink there.
-    const bool reversal =
-        t > 0 && t + 1 < n && (rec.u[t] - rec.u[t - 1]) * (rec.u[t + 1] - rec.u[t]) <= 0.0;
+    const bool reversal = !((prev_u[t] - rec.u[t]) * (next_u[t] - rec.u[t]) < 0.0);
     const bool seg_edge =
         (t > 0 && rec.seg[t] != rec.seg[t - 1]) || (t + 1 < n && rec.seg[t] != rec.seg[t + 1]);
     if (reversal || seg_edge) continue;
