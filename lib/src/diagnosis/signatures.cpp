@@ -139,7 +139,7 @@ ReturnPointSignatures return_point_signatures(const Record& rec, double sigma) {
   return out;
 }
 
-Signature congruency_signature(const Record& rec, double sigma) {
+Signature congruency_signature(const Record& rec) {
   const Walk w = walk(rec);
   const double tol = 1e-6 * w.span;
   // Monotone branches on the collapsed readings: [first, last] positions in w.idx, the first
@@ -229,9 +229,12 @@ Signature congruency_signature(const Record& rec, double sigma) {
   s.what = "monotone branches from the same turning value after different histories";
   if (pairs == 0 || dof < 8) return s;
   // A quantised sensor resolves no difference below its step: the variance of a difference of
-  // two readings is taken no smaller than q^2 / 6 (both rounded independently).
+  // two readings is taken no smaller than q^2 / 6 (both rounded independently); and a
+  // difference below 0.1 % of the range is immaterial (interpolating A between readings on a
+  // curved branch errs by about that much on noise-free data).
   const double q = quantisation_step(rec.y);
-  const double var = std::max({sse / dof, q * q / 6.0, 2.0 * sigma * sigma * 1e-4});
+  const double least = 1e-3 * rec.range;
+  const double var = std::max({sse / dof, q * q / 6.0, least * least});
   const double chi2 = explained / var;
   s.available = true;
   s.units = pairs;

@@ -36,7 +36,7 @@ struct ReturnPointSignatures {
 
 /// `sigma`: the noise of one reading (the diagnosis' floor).
 ReturnPointSignatures return_point_signatures(const Record& rec, double sigma);
-Signature congruency_signature(const Record& rec, double sigma);
+Signature congruency_signature(const Record& rec);
 /// One-sided: motion during holds in the direction of the last input step.
 Signature hold_signature(const Record& rec, double sigma);
 
