@@ -29,11 +29,10 @@ std::string Scenario::describe() const {
                        spec.protocol.readings_per_hold,
                        spec.protocol.congruency ? " congruency" : "");
   return fmt::format(
-      "voltage {} {:g} seed {} noise {:g} mm, {} loads from {:g} g, {} truth, "
+      "voltage {} {:g} seed {} noise {:g} mm, loads {} g (in this order), {} truth, "
       "spread {:g} per-hold {}",
-      effect, magnitude, spec.seed, spec.noise_mm, spec.voltage.loads_g.size(),
-      spec.voltage.loads_g.front(), spec.voltage.truth, spec.voltage.dwell_spread,
-      spec.voltage.readings_per_hold);
+      effect, magnitude, spec.seed, spec.noise_mm, fmt::join(spec.voltage.loads_g, " "),
+      spec.voltage.truth, spec.voltage.dwell_spread, spec.voltage.readings_per_hold);
 }
 
 Scenario make_scenario(const std::string& side, const std::string& effect, int index) {
