@@ -144,6 +144,10 @@ check "bad shard spec" 2 "--shard must be i/N" -- "$bin" sweep "$sweep" -o "$wor
 printf 'thread_model = "nope.json"\n[space]\nplies = [2, 0]\n' >"$work/bad-sweep.toml"
 check "sweep spec errors are located" 3 "bad-sweep.toml:3:13: 'plies' must hold integers 1..100" -- "$bin" sweep "$work/bad-sweep.toml" -o "$work/x.csv"
 
+printf '[protocol]\nshape = "zigzag"\n' >"$work/bad-shape.toml"
+check "rig protocol shape errors are located" 3 "bad-shape.toml:2:9: 'shape' must be damped or repeated" -- "$bin" simulate "$work/bad-shape.toml" -o "$work/bad-shape.csv"
+assert "no output on a bad rig description" test ! -e "$work/bad-shape.csv"
+
 # diagnose: SPEC's JSON keys; drift hidden in rig data is named.
 printf 'specimen = "thread"\nseed = 11\n[effects]\ndrift = 0.05\n' >"$work/drift.toml"
 "$bin" simulate "$work/drift.toml" -o "$work/drift.csv" >/dev/null

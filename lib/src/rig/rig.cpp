@@ -149,6 +149,8 @@ RigSpec load_rig_spec(const std::filesystem::path& path) {
     q.dwell_s = r.positive(*p, "dwell_s", q.dwell_s, false);
     q.dwell_spread = r.number(*p, "dwell_spread", q.dwell_spread, 0.0);
     q.shape = r.text(*p, "shape", q.shape);
+    if (q.shape != "damped" && q.shape != "repeated")
+      r.fail(p->get("shape"), fmt::format("'shape' must be damped or repeated, got '{}'", q.shape));
     q.congruency = r.boolean(*p, "congruency", q.congruency);
     q.readings_per_hold =
         static_cast<int>(r.integer(*p, "readings_per_hold", q.readings_per_hold, 1, 1000));
