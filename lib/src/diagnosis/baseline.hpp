@@ -24,7 +24,13 @@ struct Record {
   std::vector<int> seg;  ///< segment of each row (0, 1, ...; one segment for load tests)
   std::vector<std::size_t> seg_first, seg_count;
   std::vector<double> seg_load;  ///< N (several_loads only)
-  std::vector<int> fold;         ///< held-out fold of each row; -1 = always in training
+  /// Held-out fold of each row; kAlwaysTrained = in every training set, never scored;
+  /// kMemoryOnly = in the memory of the operator only (never fitted, never scored).
+  std::vector<int> fold;
+  static constexpr int kAlwaysTrained = -1;
+  static constexpr int kMemoryOnly = -2;
+  /// Whether row t is fitted when fold k is held out.
+  bool trains(std::size_t t, int k) const { return fold[t] != k && fold[t] != kMemoryOnly; }
   int folds = 0;
   std::string fold_kind;  ///< "cycles" or "load segments"
   double range = 1.0;     ///< output range

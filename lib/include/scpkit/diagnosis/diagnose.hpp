@@ -16,7 +16,9 @@
 //    fitted without each block and scored on it exactly as the baseline; detected when it
 //    gains >= min_gain_pct of held-out E_RMS and the gain is significant against random sign
 //    flips of per-block gains; effects defined by a residual signature must also pass a
-//    block-permutation test of that signature (blocks of residuals keep their autocorrelation).
+//    block-permutation test of that signature (blocks of residuals keep their autocorrelation)
+//    at alpha, and then its gain need only be significant at gain_alpha (an intersection-union
+//    test: its level is still alpha, since the signature alone is a level-alpha test).
 // 4. cause: outliers when detected, else the detected effect with the largest held-out gain;
 //    "none" when nothing is detected and the held-out error is within twice the noise floor;
 //    "unexplained" otherwise.
@@ -56,6 +58,7 @@ struct DiagnoseOptions {
   int folds = 5;
   int permutations = 199;
   double alpha = 0.01;        ///< significance level of each detector
+  double gain_alpha = 0.05;   ///< the gain's test, after a significant residual signature
   double min_gain_pct = 5.0;  ///< an extension must gain at least this on held-out data
   std::uint64_t seed = 1;
   /// How the baseline is identified: L and smoothness chosen by cross-validation unless set.
