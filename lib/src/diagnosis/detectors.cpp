@@ -704,12 +704,22 @@ Finding detect_outliers(Context& ctx) {
   f.extended_model = "baseline refitted without the flagged readings (robust fit)";
   // Isolated spikes: a reading far from its neighbours' mean, measured against the robust scale
   // of that same quantity (structured residuals, smooth in time, do not produce them).
+  // Rows never held out (the segments at the extreme loads) are screened on their in-sample
+  // residuals: a spike there corrupts every fold's fit without ever being scored.
+  std::vector<double> res(n, 0.0);
+  std::vector<std::size_t> screened;
+  for (std::size_t t = 0; t < n; ++t) {
+    if (rec.fold[t] == Record::kMemoryOnly) continue;
+    res[t] =
+        rec.fold[t] == Record::kAlwaysTrained ? rec.y[t] - ctx.by_fold.front().pred[t] : ctx.r[t];
+    screened.push_back(t);
+  }
   std::vector<double> spike, level;
-  for (std::size_t t : ctx.scored) {
-    const double left = t > 0 ? ctx.r[t - 1] : ctx.r[t + 1];
-    const double right = t + 1 < n ? ctx.r[t + 1] : ctx.r[t - 1];
-    spike.push_back(ctx.r[t] - 0.5 * (left + right));
-    level.push_back(ctx.r[t]);
+  for (std::size_t t : screened) {
+    const double left = t > 0 ? res[t - 1] : res[t + 1];
+    const double right = t + 1 < n ? res[t + 1] : res[t - 1];
+    spike.push_back(res[t] - 0.5 * (left + right));
+    level.push_back(res[t]);
   }
   // The scales are not taken below 0.2 % of the range: on nearly noise-free data the
   // baseline's own kinks would otherwise stand many "sigmas" out (a spike must be at least
@@ -739,16 +749,18 @@ Finding detect_outliers(Context& ctx) {
     }
   }
   double zmax = 0.0;
-  for (std::size_t i = 0; i < ctx.scored.size(); ++i) {
-    const std::size_t t = ctx.scored[i];
+  for (std::size_t i = 0; i < screened.size(); ++i) {
+    const std::size_t t = screened[i];
     if (virgin[t] || (t > 0 && virgin[t - 1]) || (t + 1 < n && virgin[t + 1])) continue;
-    // Input reversals are left out: the model's error may legitimately kink there.
+    // At input reversals the model's error may legitimately kink: a spike there must stand
+    // twice as far out. Segment edges are left out (their neighbours belong to another load).
     const bool reversal = !((prev_u[t] - rec.u[t]) * (next_u[t] - rec.u[t]) < 0.0);
     const bool seg_edge =
         (t > 0 && rec.seg[t] != rec.seg[t - 1]) || (t + 1 < n && rec.seg[t] != rec.seg[t + 1]);
-    if (reversal || seg_edge) continue;
-    const double z = std::abs(spike[i] - med) / scale;
-    const double lv = std::abs(level[i] - r_med) / r_scale;
+    if (seg_edge) continue;
+    const double strict = reversal ? 2.0 : 1.0;
+    const double z = std::abs(spike[i] - med) / scale / strict;
+    const double lv = std::abs(level[i] - r_med) / r_scale / strict;
     zmax = std::max(zmax, std::min(z, 1.6 * lv));
     if (z > 12.0 && lv > 6.0) {
       flagged[t] = 1;
