@@ -22,17 +22,19 @@ T pick(const std::array<T, N>& v, int index, std::uint64_t salt) {
 }  // namespace
 
 std::string Scenario::describe() const {
+  const std::string what = effect == "creep" ? fmt::format("creep {:g} (tau {:g} s)", magnitude,
+                                                           spec.effects.creep_tau_s)
+                                             : fmt::format("{} {:g}", effect, magnitude);
   if (side == "load")
-    return fmt::format("load {} {:g} seed {} noise {:g} mm, {} x{} spread {:g} per-hold {}{}",
-                       effect, magnitude, spec.seed, spec.noise_mm, spec.protocol.shape,
-                       spec.protocol.cycles, spec.protocol.dwell_spread,
-                       spec.protocol.readings_per_hold,
+    return fmt::format("load {} seed {} noise {:g} mm, {} x{} spread {:g} per-hold {}{}", what,
+                       spec.seed, spec.noise_mm, spec.protocol.shape, spec.protocol.cycles,
+                       spec.protocol.dwell_spread, spec.protocol.readings_per_hold,
                        spec.protocol.congruency ? " congruency" : "");
   return fmt::format(
-      "voltage {} {:g} seed {} noise {:g} mm, loads {} g (in this order), {} truth, "
+      "voltage {} seed {} noise {:g} mm, loads {} g (in this order), {} truth, "
       "spread {:g} per-hold {}",
-      effect, magnitude, spec.seed, spec.noise_mm, fmt::join(spec.voltage.loads_g, " "),
-      spec.voltage.truth, spec.voltage.dwell_spread, spec.voltage.readings_per_hold);
+      what, spec.seed, spec.noise_mm, fmt::join(spec.voltage.loads_g, " "), spec.voltage.truth,
+      spec.voltage.dwell_spread, spec.voltage.readings_per_hold);
 }
 
 Scenario make_scenario(const std::string& side, const std::string& effect, int index) {
@@ -85,7 +87,7 @@ Scenario make_scenario(const std::string& side, const std::string& effect, int i
   if (effect == "creep") {
     e.creep = s.magnitude = m(0.1, 0.2, 0.4);
     e.creep_tau_s = (side == "load" ? r.protocol.dwell_s : r.voltage.dwell_s) *
-                    pick(std::array{0.5, 1.0, 2.0}, index, 7);
+                    pick(std::array{0.5, 1.0, 2.0, 5.0}, index, 7);
   }
   if (effect == "minor_loop_noncongruence")
     e.minor_loop_noncongruence = s.magnitude = m(0.1, 0.2, 0.3);

@@ -370,7 +370,7 @@ Finding kelvin_creep(Context& ctx) {
   // lose on held-out cycles what the forced lag costs (measured: -2 to -84 % on clean rig data).
   std::vector<Kelvin> candidates{{0.0, step}};
   for (double c : {0.1, 0.2, 0.4}) {
-    for (double tau : {0.5, 1.0, 2.0}) candidates.push_back({c, tau * step});
+    for (double tau : {0.5, 1.0, 2.0, 5.0, 10.0}) candidates.push_back({c, tau * step});
   }
   auto filter_for = [&rec](Kelvin k) {
     return [&rec, k](Eigen::Ref<Eigen::VectorXd> p) {
@@ -795,8 +795,11 @@ Finding detect_outliers(Context& ctx) {
     f.heldout_rms_after = s.rms_after;
     f.gain_pct = s.gain_pct;
   }
-  // Removing them must help, unless the spikes are unmistakable (> 20 robust sigmas).
-  f.detected = count > 0 && f.p_value < ctx.opt.alpha && (f.gain_pct > 1.0 || zmax > 20.0);
+  // Removing them must help, unless the spikes are unmistakable (> 20 robust sigmas) and
+  // removing them does not hurt either (a reading whose removal worsens the held-out fit is
+  // one the model needs, whatever its residual).
+  f.detected = count > 0 && f.p_value < ctx.opt.alpha &&
+               (f.gain_pct > 1.0 || (zmax > 20.0 && f.gain_pct > -1.0));
   f.evidence = fmt::format(
       "{} reading(s) stand more than 12 robust sigmas off their neighbours (largest {:.1f}); "
       "without them the held-out E_RMS on the other readings goes from {:.3f} to {:.3f} % of "

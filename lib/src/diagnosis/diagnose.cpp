@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "baseline.hpp"
 #include "detectors.hpp"
@@ -56,7 +57,17 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   // Effects read off model-free signatures are named before those known only by a gain:
   // readings moving during holds (creep) and history-dependent loop shapes explain return-point
   // offsets too, so they come before the lonely stroke.
+  // With one reading per hold creep is known by its gain alone, and a slow Kelvin element
+  // takes up part of a drift: there a detected drift that gains more is named instead.
+  auto gain_of = [&](const std::string& e) {
+    for (const Finding& f : d.findings) {
+      if (f.effect == e && f.detected) return f.gain_pct;
+    }
+    return -std::numeric_limits<double>::infinity();
+  };
   for (const char* e : {"outliers", "creep", "minor_loop_noncongruence", "lonely_stroke"}) {
+    if (std::string(e) == "creep" && !ctx.holds.available && gain_of("drift") > gain_of("creep"))
+      continue;
     for (const Finding& f : d.findings) {
       if (!best && f.detected && f.effect == e) best = &f;
     }
