@@ -40,10 +40,8 @@ int main(int argc, char** argv) {
       // One scenario in detail: --show SIDE EFFECT INDEX [--csv FILE].
       const testing::Scenario s =
           testing::make_scenario(argv[i + 1], argv[i + 2], std::atoi(argv[i + 3]));
-      if (i + 5 < argc && std::string(argv[i + 4]) == "--csv") {  // the rig's file, to read
-        static const Material card = find_material("nylon-110-34-dtex");
-        std::ofstream(argv[i + 5]) << run_rig(s.spec, card).to_csv();
-      }
+      if (i + 5 < argc && std::string(argv[i + 4]) == "--csv")  // the rig's file, to read
+        std::ofstream(argv[i + 5]) << testing::scenario_csv(s);
       const Diagnosis d = testing::diagnose_scenario(s);
       std::cout << s.describe() << ": baseline " << d.baseline_model << " rms " << d.rms_pct_range
                 << " floor " << d.noise_floor_pct_range << " -> " << d.cause << "\n";

@@ -96,9 +96,13 @@ Scenario make_scenario(const std::string& side, const std::string& effect, int i
   return s;
 }
 
-Diagnosis diagnose_scenario(const Scenario& s, const DiagnoseOptions& options) {
+std::string scenario_csv(const Scenario& s) {
   static const Material card = find_material("nylon-110-34-dtex");
-  const Measurement m = Measurement::parse(run_rig(s.spec, card).to_csv(), "rig.csv");
+  return run_rig(s.spec, card).to_csv();
+}
+
+Diagnosis diagnose_scenario(const Scenario& s, const DiagnoseOptions& options) {
+  const Measurement m = Measurement::parse(scenario_csv(s), "rig.csv");
   DiagnoseData data;
   data.time_s = m.find(Quantity::kTime)->values;
   data.output = select_response(m).values;

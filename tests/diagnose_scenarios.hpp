@@ -34,6 +34,9 @@ inline std::vector<std::string> scenario_effects(const std::string& side) {
 /// Scenario number `index` of an effect on a side (deterministic).
 Scenario make_scenario(const std::string& side, const std::string& effect, int index);
 
+/// The rig's measurement file (SPEC format) for a scenario.
+std::string scenario_csv(const Scenario& s);
+
 /// Runs the rig, writes and re-reads the SPEC file, and diagnoses it as `scpkit diagnose` does.
 Diagnosis diagnose_scenario(const Scenario& s, const DiagnoseOptions& options = {});
 

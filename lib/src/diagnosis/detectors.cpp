@@ -244,6 +244,17 @@ Finding model_finding(Context& ctx, const std::string& effect, const std::string
 
 namespace {
 
+// Each segment's mean reading time (s).
+std::vector<double> segment_mean_times(const Record& rec) {
+  std::vector<double> mean(rec.seg_first.size(), 0.0);
+  for (std::size_t s = 0; s < mean.size(); ++s) {
+    for (std::size_t t = rec.seg_first[s]; t < rec.seg_first[s] + rec.seg_count[s]; ++t)
+      mean[s] += rec.time[t];
+    mean[s] /= static_cast<double>(rec.seg_count[s]);
+  }
+  return mean;
+}
+
 // Drift on tests at several loads: the per-segment offsets the baseline frees absorb a drift on
 // the training segments, so a trend fitted to training residuals sees nothing. The drift lives
 // in the offset map instead: a_s = f1(F_s) + beta t_s (t_s the segment's mean time), through
@@ -254,13 +265,8 @@ Finding drift_in_offset_map(Context& ctx) {
   const auto [flo, fhi] = std::minmax_element(rec.seg_load.begin(), rec.seg_load.end());
   const double f_lo = *flo, f_scale = std::max(*fhi - *flo, 1e-300);
   const double t0 = rec.time.front(), t1 = std::max(rec.time.back(), t0 + 1e-300);
-  std::vector<double> seg_time(rec.seg_first.size());
-  for (std::size_t s = 0; s < seg_time.size(); ++s) {
-    double sum = 0.0;
-    for (std::size_t t = rec.seg_first[s]; t < rec.seg_first[s] + rec.seg_count[s]; ++t)
-      sum += rec.time[t];
-    seg_time[s] = (sum / static_cast<double>(rec.seg_count[s]) - t0) / (t1 - t0);
-  }
+  std::vector<double> seg_time = segment_mean_times(rec);
+  for (double& t : seg_time) t = (t - t0) / (t1 - t0);
   std::string betas;
   Finding f = model_finding(
       ctx, "drift", "augmented baseline with offset map f1(F) + beta t (linear drift in time)",
@@ -307,38 +313,28 @@ Finding drift_in_offset_map(Context& ctx) {
 Finding detect_drift(Context& ctx) {
   const Record& rec = ctx.rec;
   const double t0 = rec.time.front(), t1 = std::max(rec.time.back(), t0 + 1e-300);
-  Finding f;
-  if (rec.several_loads && rec.fold_kind == "load segments") {
-    f = drift_in_offset_map(ctx);
-    // Loads tested in the order of their size make the offset map's trend a function of the
-    // load, which f1 absorbs; the drift within each segment remains (a trend about the
-    // segment's mean time, the same slope in every segment).
-    std::vector<double> mean_time(rec.seg_first.size(), 0.0);
-    for (std::size_t t = 0; t < rec.size(); ++t)
-      mean_time[static_cast<std::size_t>(rec.seg[t])] +=
-          rec.time[t] / static_cast<double>(rec.seg_count[static_cast<std::size_t>(rec.seg[t])]);
-    Finding within = feature_finding(
-        ctx, "drift", "augmented baseline + linear trend in time within each load segment",
-        [&](const FoldFit&) {
-          Eigen::MatrixXd X(static_cast<Eigen::Index>(rec.size()), 1);
-          for (std::size_t t = 0; t < rec.size(); ++t)
-            X(static_cast<Eigen::Index>(t), 0) =
-                (rec.time[t] - mean_time[static_cast<std::size_t>(rec.seg[t])]) / (t1 - t0);
-          return X;
-        },
-        "a trend in time within each load segment");
-    if (within.gain_pct > f.gain_pct) f = within;
-  } else {
-    f = feature_finding(
-        ctx, "drift", "baseline + linear trend in time",
-        [&](const FoldFit&) {
-          Eigen::MatrixXd X(static_cast<Eigen::Index>(rec.size()), 1);
-          for (std::size_t t = 0; t < rec.size(); ++t)
-            X(static_cast<Eigen::Index>(t), 0) = (rec.time[t] - t0) / (t1 - t0);
-          return X;
-        },
-        "a linear trend in time");
-  }
+  // Load tests: one trend over the record. Tests held out by load segment: the drift lives in
+  // the offset map, and when the loads were tested in the order of their size the map's trend
+  // is a function of the load, which f1 absorbs; the drift inside each segment remains (a trend
+  // about the segment's mean time, one slope for all). The one that gains more is reported.
+  const bool by_segment = rec.several_loads && rec.fold_kind == "load segments";
+  Finding map;
+  if (by_segment) map = drift_in_offset_map(ctx);
+  std::vector<double> origin(rec.seg_first.size(), t0);  // each segment's time origin
+  if (by_segment) origin = segment_mean_times(rec);
+  Finding f = feature_finding(
+      ctx, "drift",
+      by_segment ? "augmented baseline + linear trend in time within each load segment"
+                 : "baseline + linear trend in time",
+      [&](const FoldFit&) {
+        Eigen::MatrixXd X(static_cast<Eigen::Index>(rec.size()), 1);
+        for (std::size_t t = 0; t < rec.size(); ++t)
+          X(static_cast<Eigen::Index>(t), 0) =
+              (rec.time[t] - origin[static_cast<std::size_t>(rec.seg[t])]) / (t1 - t0);
+        return X;
+      },
+      by_segment ? "a trend in time within each load segment" : "a linear trend in time");
+  if (by_segment && !(f.gain_pct > map.gain_pct)) f = map;
   const Signature& sig = ctx.return_point.time;
   if (sig.available) {
     f.evidence += "; " + describe(sig);
@@ -731,15 +727,16 @@ Finding detect_outliers(Context& ctx) {
   int count = 0;
   // The nearest different input before and after each reading (readings during a hold share
   // their input): a reading at a turning value has both on the same side.
-  std::vector<double> prev_u(n, std::numeric_limits<double>::quiet_NaN()), next_u(prev_u);
+  const double none = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> prev_u(n, none), next_u(n, none);
   for (std::size_t t = 1; t < n; ++t)
     prev_u[t] = rec.u[t - 1] != rec.u[t] ? rec.u[t - 1] : prev_u[t - 1];
   for (std::size_t t = n - 1; t-- > 0;)
     next_u[t] = rec.u[t + 1] != rec.u[t] ? rec.u[t + 1] : next_u[t + 1];
-  // On load tests, readings on the virgin branch (the input at its running maximum) are left
-  // out too: a first stroke the baseline does not model (docs/diagnose.md) is not a spike.
-  // (Tests at several loads restart the baseline's memory with each segment, as the
-  // specimen's.)
+  // On load tests, readings with the input at its running maximum and their neighbours are left
+  // out too: the first rise is memory-only (never screened), and this keeps its end, where the
+  // fitted rows begin next to unfitted ones, from reading as a spike. (Tests at several loads
+  // restart the baseline's memory with each segment, as the specimen's.)
   std::vector<char> virgin(n, 0);
   for (std::size_t t = 0, M = 0; t < n && !rec.several_loads; ++t) {
     if (t == 0 || rec.seg[t] != rec.seg[t - 1]) M = t;

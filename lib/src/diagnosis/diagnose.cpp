@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
 #include "baseline.hpp"
 #include "detectors.hpp"
@@ -49,9 +48,11 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   // the maps can mimic (the converse does not hold: on knee data the running-maximum term gains
   // nothing), so a detected lonely stroke is preferred to offset_nonlinearity. Otherwise the
   // detected effect whose extension gains most on held-out data.
-  auto detected = [&](const std::string& e) {
-    return std::any_of(d.findings.begin(), d.findings.end(),
-                       [&](const Finding& f) { return f.effect == e && f.detected; });
+  auto detected = [&](const std::string& e) -> const Finding* {
+    for (const Finding& f : d.findings) {
+      if (f.effect == e && f.detected) return &f;
+    }
+    return nullptr;
   };
   const Finding* best = nullptr;
   // Effects read off model-free signatures are named before those known only by a gain:
@@ -59,18 +60,12 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   // offsets too, so they come before the lonely stroke.
   // With one reading per hold creep is known by its gain alone, and a slow Kelvin element
   // takes up part of a drift: there a detected drift that gains more is named instead.
-  auto gain_of = [&](const std::string& e) {
-    for (const Finding& f : d.findings) {
-      if (f.effect == e && f.detected) return f.gain_pct;
-    }
-    return -std::numeric_limits<double>::infinity();
-  };
+  const Finding* drift = detected("drift");
   for (const char* e : {"outliers", "creep", "minor_loop_noncongruence", "lonely_stroke"}) {
-    if (std::string(e) == "creep" && !ctx.holds.available && gain_of("drift") > gain_of("creep"))
+    const Finding* f = detected(e);
+    if (f && f->effect == "creep" && !ctx.holds.available && drift && drift->gain_pct > f->gain_pct)
       continue;
-    for (const Finding& f : d.findings) {
-      if (!best && f.detected && f.effect == e) best = &f;
-    }
+    if (!best) best = f;
   }
   const Finding* by_gain = nullptr;
   for (const Finding& f : d.findings) {

@@ -4,7 +4,9 @@
 //
 // 1. Baseline, identified with held-out validation (never random rows):
 //    - load tests: a Preisach operator on the load; held out by blocks of whole cycles (or the
-//      file's segments);
+//      file's segments); the first rise, until the load first reaches its maximum, only drives
+//      the memory (it depends on the unseen state before the test) and is neither fitted nor
+//      scored;
 //    - tests at several constant loads (voltage, power, temperature): the augmented model
 //      y = f1(F) + f2(F) H[v], H a Preisach operator; held out by load segment (each interior
 //      load in turn, predicted through the quadratic maps of the others).
