@@ -152,6 +152,7 @@ int run_diagnose(const std::vector<std::string>& args) {
   data.input = in.values;
   data.output = out.values;
   if (const MeasurementColumn* t = m.find(Quantity::kTime)) data.time_s = t->values;
+  if (const MeasurementColumn* t = m.find(Quantity::kDwell)) data.dwell_s = t->values;
   if (const MeasurementColumn* seg = m.find(Quantity::kSegment)) {
     for (double v : seg->values) data.segments.push_back(static_cast<int>(v));
   }

@@ -90,7 +90,7 @@ Scenario make_scenario(const std::string& side, const std::string& effect, int i
                     pick(std::array{0.5, 1.0, 2.0, 5.0}, index, 7);
   }
   if (effect == "minor_loop_noncongruence")
-    e.minor_loop_noncongruence = s.magnitude = m(0.1, 0.2, 0.3);
+    e.minor_loop_noncongruence = s.magnitude = m(0.4, 0.7, 1.0);
   if (effect == "load_shape_coupling") e.load_shape_coupling = s.magnitude = m(0.3, 0.6, 1.0);
   if (effect == "offset_nonlinearity") e.offset_nonlinearity = s.magnitude = m(0.05, 0.1, 0.2);
   return s;

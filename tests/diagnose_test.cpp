@@ -38,10 +38,8 @@ void expect_named(const std::string& side, const std::string& effect,
       if (!f.tested) {
         EXPECT_FALSE(f.detected) << f.effect;
       }
-      // A detected effect's extension gains on held-out data. Non-congruence is named by its
-      // model-free signature and its moving-Preisach gain is reported as measured (on the
-      // rig it is 0: docs/diagnose.md), so it is exempt.
-      if (f.detected && f.effect != "minor_loop_noncongruence") {
+      // A detected effect's extension gains on held-out data.
+      if (f.detected) {
         EXPECT_LT(f.heldout_rms_after, f.heldout_rms_before) << f.effect;
       }
     }
@@ -112,13 +110,13 @@ TEST(Diagnose, VoltageDriftInLoadOrderAndSpikesAnywhere) {
   expect_named("voltage", "outliers", {0, 8});
 }
 
-// Non-congruent minor loops (moving Preisach truth) between the same extrema from two
-// histories, read by a sensor that resolves the difference (0.004 mm steps): the congruency
-// signature names them on repeated-cycle protocols (indices 1 and 4). On the damped protocol
-// (indices 2 and 5) the loops' two histories differ too little and it is missed (named
-// `unexplained` and `outliers`): docs/diagnose.md, the confusion matrix.
+// Non-congruent minor loops (the rig's output-dependent loop height) between the same
+// extrema from two histories, read by a sensor that resolves the difference (0.004 mm steps):
+// named, and the extension gains on held-out cycles, at the largest magnitude on damped and
+// repeated protocols (indices 2, 5, 8). At 0.4-0.7 with this sensor it is found in 1 of 6
+// (measured); with the 0.04 mm sensor rarely (the confusion matrix, docs/diagnose.md).
 TEST(Diagnose, NoncongruenceFoundWhereTheSensorResolvesIt) {
-  expect_named("load", "minor_loop_noncongruence", {1, 4}, [](RigSpec& r) {
+  expect_named("load", "minor_loop_noncongruence", {2, 5, 8}, [](RigSpec& r) {
     r.resolution_mm = 0.004;
     r.noise_mm = 0.005;
   });
@@ -153,6 +151,35 @@ TEST(Diagnose, TheDriftExtensionGainsOnHeldOutData) {
   for (std::size_t i = 0; i < d.findings.size(); ++i)
     EXPECT_EQ(d.findings[i].effect, effect_names()[i]);
   EXPECT_EQ(d.heldout_by, "cycles");
+}
+
+// A file without a clock: the readings' times come from dwell_s (time held at the input before
+// the reading). On rig files, which hold both, they reproduce time_s exactly, with readings
+// during holds, varied holds, and load changes on voltage tests.
+TEST(Diagnose, ReadingTimesFromDwellReproduceTheClock) {
+  for (const std::string side : {"load", "voltage"}) {
+    testing::Scenario s = make_scenario(side, "none", 0);
+    s.spec.protocol.readings_per_hold = s.spec.voltage.readings_per_hold = 3;
+    s.spec.protocol.dwell_spread = s.spec.voltage.dwell_spread = 1.0;
+    const Measurement m = Measurement::parse(testing::scenario_csv(s), "rig.csv");
+    DiagnoseData d;
+    d.dwell_s = m.find(Quantity::kDwell)->values;
+    if (side == "voltage") {
+      d.input = select_input(m, "voltage_V").values;
+      d.load_N = m.find(Quantity::kLoad)->values;
+    } else {
+      d.input = select_input(m).values;
+    }
+    const std::vector<double>& clock = m.find(Quantity::kTime)->values;
+    const std::vector<double> t = reading_times_from_dwell(d);
+    ASSERT_EQ(t.size(), clock.size());
+    for (std::size_t k = 0; k < t.size(); ++k)
+      ASSERT_NEAR(t[k], clock[k], 1e-6 * clock.back()) << side << " row " << k;
+  }
+  DiagnoseData bad;
+  bad.dwell_s = {1.0, 2.0};
+  bad.input = {1.0};
+  EXPECT_THROW_MSG(reading_times_from_dwell(bad), InvalidArgument, "different lengths");
 }
 
 TEST(Diagnose, RefusesWhatCannotBeDiagnosed) {

@@ -46,6 +46,7 @@ Record make_record(const DiagnoseData& data, const DiagnoseOptions& opt) {
   Record rec;
   const std::size_t n = data.input.size();
   if (data.output.size() != n || (!data.time_s.empty() && data.time_s.size() != n) ||
+      (!data.dwell_s.empty() && data.dwell_s.size() != n) ||
       (!data.segments.empty() && data.segments.size() != n) ||
       (!data.load_N.empty() && data.load_N.size() != n)) {
     throw_invalid("diagnose: the columns have different lengths");
@@ -59,6 +60,7 @@ Record make_record(const DiagnoseData& data, const DiagnoseOptions& opt) {
   if (!(rec.range > 0.0))
     throw IdentificationError("the response never changes: nothing to diagnose");
   rec.time = data.time_s;
+  if (rec.time.empty() && !data.dwell_s.empty()) rec.time = scpkit::reading_times_from_dwell(data);
   if (rec.time.empty()) {
     for (std::size_t t = 0; t < n; ++t) rec.time.push_back(static_cast<double>(t));
   }

@@ -628,66 +628,61 @@ Finding detect_noncongruence(Context& ctx) {
                       "needs monotone branches from the same turning value after different "
                       "histories (minor loops between the same extrema) in one load record, "
                       "which these data do not hold");
-  // The extension: a moving Preisach model y = Gamma[u + a k (y - y0)] (k = input range /
-  // output range), identified as a linear least squares on the shifted input u + a k y_measured
-  // (training rows), predicted by solving the fixed point at each step; a chosen on the
-  // training rows.
-  const auto [umin, umax] = std::minmax_element(rec.u.begin(), rec.u.end());
-  const double k = (*umax - *umin) / rec.range, y0 = rec.y.front();
-  auto simulate = [&](const PreisachModel& m, double a) {
-    std::vector<double> y(rec.size());
-    PreisachState st = PreisachState::negative_saturation(m.grid());
-    double prev = y0;
-    for (std::size_t t = 0; t < rec.size(); ++t) {
-      const PreisachState before = st;
-      double yt = prev;
-      for (int it = 0; it < 40; ++it) {
-        st = before;
-        const double next = m.step(st, rec.u[t] + a * k * (yt - y0));
-        const bool done = std::abs(next - yt) < 1e-10 * rec.range;
-        yt = 0.5 * (yt + next);  // damped iteration
-        if (done) break;
-      }
-      st = before;
-      y[t] = prev = m.step(st, rec.u[t] + a * k * (yt - y0));
-    }
-    return y;
+  // The extension: an output-dependent loop height, y = phi_c(Gamma[u]) with the monotone map
+  // phi_c(w) = w + c w^2 in units of the range (PHYSICS.md section 5, "output-dependent
+  // density"): a loop's height scales with 1 + 2 c w at its level, which no classical Preisach
+  // model does (its loops between the same extrema are congruent) while wiping-out holds.
+  // Identified as a classical model of the measured response mapped back, psi_c(y); c chosen
+  // on each fold's training rows (c = 0 is the baseline).
+  const double y_lo = *std::min_element(rec.y.begin(), rec.y.end()), R = rec.range;
+  auto phi = [&](double c, double w) {
+    const double x = (w - y_lo) / R;
+    return y_lo + R * (x + c * x * x);
+  };
+  auto psi = [&](double c, double y) {
+    const double x = (y - y_lo) / R;
+    return y_lo + R * 2.0 * x / (1.0 + std::sqrt(std::max(1.0 + 4.0 * c * x, 0.0)));
+  };
+  auto predict = [&](const std::vector<char>& train, double c, bool quick) {
+    std::vector<double> w(rec.size());
+    for (std::size_t t = 0; t < rec.size(); ++t) w[t] = psi(c, rec.y[t]);
+    std::vector<double> p = ctx.base.fit(train, {nullptr, &w, quick}).pred;
+    for (double& v : p) v = phi(c, v);
+    return p;
   };
   std::string chosen;
   Finding f = model_finding(
-      ctx, "minor_loop_noncongruence", "moving Preisach model Gamma[u + a k y] (a chosen in-fold)",
+      ctx, "minor_loop_noncongruence",
+      "output-dependent loop height y = phi_c(Gamma[u]), phi_c(w) = w + c w^2 (c chosen in-fold)",
       [&](int fold) {
         const std::vector<char> train = ctx.train_mask(fold);
         const FoldFit& base = ctx.by_fold[static_cast<std::size_t>(fold)];
-        PreisachFitOptions o = ctx.base.options();
-        o.grid_shifts = 1;
-        o.exclude.assign(rec.size(), 0);
-        for (std::size_t t = 0; t < rec.size(); ++t) o.exclude[t] = !train[t];
-        std::vector<double> best_p = base.pred;
-        double best = training_sse(rec.y, base.pred, train), best_a = 0.0;
-        for (double a : {-0.3, -0.15, 0.15, 0.3}) {
-          std::vector<double> ue(rec.size());
-          for (std::size_t t = 0; t < rec.size(); ++t) ue[t] = rec.u[t] + a * k * (rec.y[t] - y0);
-          o.lo.reset();
-          o.hi.reset();
-          const std::vector<double> p = simulate(fit_preisach(ue, rec.y, {}, o).model, a);
-          const double ss = training_sse(rec.y, p, train);
+        // Every candidate, c = 0 too, on one grid: chosen like for like, then refitted.
+        double best = std::numeric_limits<double>::infinity(), best_c = 0.0;
+        for (double c : {0.0, -0.2, -0.1, 0.1, 0.2, 0.3, 0.5, 0.8}) {
+          const double ss = training_sse(rec.y, predict(train, c, true), train);
           if (ss < best * (1.0 - 1e-9)) {
             best = ss;
-            best_p = p;
-            best_a = a;
+            best_c = c;
           }
         }
-        chosen += fmt::format("{}{:+g}", chosen.empty() ? "" : ", ", best_a);
-        return best_p;
+        chosen += fmt::format("{}{:+g}", chosen.empty() ? "" : ", ", best_c);
+        return best_c == 0.0 ? base.pred : predict(train, best_c, false);
       },
-      "a moving Preisach model (the input shifted by the output)");
-  f.extended_model += " (a per fold: " + chosen + ")";
+      "loops whose height depends on the output level (a monotone map of a Preisach model)");
+  f.extended_model += " (c per fold: " + chosen + ")";
+  const double gain_p = f.p_value;
   f.evidence = describe(sig) + "; " + f.evidence;
   f.score = sig.z;
   f.p_value = sig.p_value;
-  // Named by the model-free signature; the extension's held-out gain is reported as measured.
-  f.detected = sig.p_value < ctx.opt.alpha;
+  // The signature assumes independent reading errors; quantisation and interpolation make it
+  // fire on clean data now and then (measured: p = 0.0014 on a clean rig record at 0.02 mm
+  // noise). Named when the extension also gains on held-out cycles (intersection-union), or
+  // by the gain alone at alpha (a sensor step near the loops' difference leaves the signature
+  // few comparisons; the extension uses every reading).
+  const bool gains = f.gain_pct >= ctx.opt.min_gain_pct;
+  f.detected = gains && (gain_p < ctx.opt.alpha ||
+                         (sig.p_value < ctx.opt.alpha && gain_p < ctx.opt.gain_alpha));
   return f;
 }
 

@@ -5,8 +5,25 @@
 
 #include "baseline.hpp"
 #include "detectors.hpp"
+#include "scpkit/error.hpp"
 
 namespace scpkit {
+
+std::vector<double> reading_times_from_dwell(const DiagnoseData& data) {
+  if (data.input.size() != data.dwell_s.size() ||
+      (!data.load_N.empty() && data.load_N.size() != data.dwell_s.size()))
+    throw_invalid("reading_times_from_dwell: the columns have different lengths");
+  std::vector<double> time(data.dwell_s.size());
+  double start = 0.0;
+  for (std::size_t t = 0; t < time.size(); ++t) {
+    const bool same_hold = t > 0 && data.input[t] == data.input[t - 1] &&
+                           (data.load_N.empty() || data.load_N[t] == data.load_N[t - 1]) &&
+                           data.dwell_s[t] > data.dwell_s[t - 1];
+    if (t > 0 && !same_hold) start = time[t - 1];
+    time[t] = start + std::max(data.dwell_s[t], 0.0);
+  }
+  return time;
+}
 
 const std::vector<std::string>& effect_names() {
   static const std::vector<std::string> names = {

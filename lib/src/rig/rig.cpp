@@ -67,11 +67,8 @@ void RigSpec::validate() const {
       throw_invalid("effect magnitudes must be finite and >= 0");
   }
   if (e.creep > 1.0) throw_invalid("creep is a fraction of the strain, <= 1");
-  if (e.minor_loop_noncongruence > 0.4) {
-    throw_invalid(
-        "minor_loop_noncongruence must be <= 0.4 (the shifted input would leave the truth's "
-        "plane)");
-  }
+  if (e.minor_loop_noncongruence > 1.0)
+    throw_invalid("minor_loop_noncongruence must be <= 1 (the output map stays monotone)");
   if (!(e.creep_tau_s > 0.0)) throw_invalid("creep_tau_s must be > 0");
   if (coil) coil->validate();
   if (load_sequence_g) {
@@ -309,25 +306,19 @@ RigRun run_rig(const RigSpec& spec, const Material& material) {
   const std::size_t n = readings.step.size();
   std::vector<double> material_strain(n), time_s(n);
   PreisachState state = PreisachState::negative_saturation(truth.grid());
-  double viscous = 0.0, running_max = f_lo, t = 0.0;
+  double viscous = 0.0, running_max = f_lo, t = 0.0, y_ref = 0.0;
   for (std::size_t k = 0; k < n; ++k) {
     t += readings.dt[k];
     time_s[k] = t;
     const double f = loads_g[readings.step[k]] * kGram / spec.plies;
-    double y;
+    double y = truth.step(state, f);
+    if (k == 0) y_ref = y;
     if (e.minor_loop_noncongruence > 0.0) {
-      // Moving Preisach model: input u + a * range_u * y / range_y, solved by fixed point.
-      const PreisachState before = state;
-      y = truth.output(state);
-      for (int it = 0; it < 30; ++it) {
-        state = before;
-        const double y_new =
-            truth.step(state, f + e.minor_loop_noncongruence * f_range * y / y_range);
-        if (std::abs(y_new - y) < 1e-14) break;
-        y = y_new;
-      }
-    } else {
-      y = truth.step(state, f);
+      // Output-dependent loop height: a monotone quadratic map of the Preisach output keeps
+      // wiping-out but scales each loop's height by 1 + 2 a z at its output level z, so loops
+      // between the same extrema after different histories differ (congruency fails).
+      const double z = std::max(0.0, (y - y_ref) / y_range);
+      y += e.minor_loop_noncongruence * y_range * z * z;
     }
     if (e.creep > 0.0) {
       viscous = y + (viscous - y) * std::exp(-readings.dt[k] / e.creep_tau_s);

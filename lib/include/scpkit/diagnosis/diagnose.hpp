@@ -69,16 +69,22 @@ struct DiagnoseOptions {
 
 /// What diagnose reads from a measurement.
 struct DiagnoseData {
-  std::vector<double> time_s;  ///< optional (reading index used when empty)
-  std::vector<double> input;   ///< load (load tests) or the drive (voltage, power, temperature)
-  std::vector<double> output;  ///< response
-  std::vector<double> load_N;  ///< tests at several constant loads: the load of each reading
-  std::vector<int> segments;   ///< optional segment ids
+  std::vector<double> time_s;   ///< optional (from dwell_s, else the reading index, when empty)
+  std::vector<double> dwell_s;  ///< optional: time held at this input before the reading
+  std::vector<double> input;    ///< load (load tests) or the drive (voltage, power, temperature)
+  std::vector<double> output;   ///< response
+  std::vector<double> load_N;   ///< tests at several constant loads: the load of each reading
+  std::vector<int> segments;    ///< optional segment ids
 };
 
 /// IdentificationError when the data cannot be diagnosed (too few readings, no excitation,
 /// nothing to hold out); InvalidArgument for inconsistent columns.
 Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& options = {});
+
+/// The readings' times from data.dwell_s (time held at the input before each reading), used when
+/// a file has no clock: a hold starts at the previous reading when the input (or the load)
+/// changes or the dwell does not grow, and each of its readings comes its dwell after that.
+std::vector<double> reading_times_from_dwell(const DiagnoseData& data);
 
 /// The effect names of SPEC.md, in the order diagnose reports them.
 const std::vector<std::string>& effect_names();
