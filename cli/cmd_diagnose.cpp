@@ -150,6 +150,7 @@ int run_diagnose(const std::vector<std::string>& args) {
   const Signal out = select_response(m);
   DiagnoseData data;
   data.input = in.values;
+  data.input_is_load = in.name.rfind("load", 0) == 0;
   data.output = out.values;
   if (const MeasurementColumn* t = m.find(Quantity::kTime)) data.time_s = t->values;
   if (const MeasurementColumn* t = m.find(Quantity::kDwell)) data.dwell_s = t->values;

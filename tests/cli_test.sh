@@ -164,6 +164,11 @@ fi
 # Voltage tests at several loads: the augmented baseline, held out by load segment; clean data.
 check "diagnose voltage tests (clean) names none" 0 '"cause": "none"' -- "$bin" diagnose "$src/examples/data/voltage-8loads.csv" --json
 check "diagnose voltage tests: augmented baseline by load segment" 0 "held out by load segments" -- "$bin" diagnose "$src/examples/data/voltage-8loads.csv"
+# Paper 001's protocol (100 -> 50 g, lonely stroke 0.08 in the rig file): named.
+check "diagnose one load change names the lonely stroke" 0 '"cause": "lonely_stroke"' -- "$bin" diagnose "$src/examples/data/voltage-lonely.csv" --json
+# A file without a clock (time_s, the rig's first column, dropped): times from dwell_s.
+awk -F, -v OFS=, '/^#/ { print; next } { $1 = ""; sub(/^,/, ""); print }' "$work/drift.csv" >"$work/drift-noclock.csv"
+check "diagnose without time_s still names the drift (times from dwell_s)" 0 '"cause": "drift"' -- "$bin" diagnose "$work/drift-noclock.csv" --json
 # A paired thread/SCP test: the ply-mapping diagnosis (prediction from card and coil).
 check "diagnose pair file: ply mapping, faithful rig file names none" 0 '"cause": "none"' -- "$bin" diagnose "$ex/pair-4ply.csv" --json
 check "diagnose pair file: legs override changes the verdict" 0 '"cause": "legs"' -- "$bin" diagnose "$ex/pair-4ply.csv" --json --legs 1

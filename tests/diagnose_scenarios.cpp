@@ -108,6 +108,7 @@ Diagnosis diagnose_scenario(const Scenario& s, const DiagnoseOptions& options) {
   data.output = select_response(m).values;
   if (s.side == "voltage") {
     data.input = select_input(m, "voltage_V").values;
+    data.input_is_load = false;
     data.load_N = m.find(Quantity::kLoad)->values;
     for (double v : m.find(Quantity::kSegment)->values)
       data.segments.push_back(static_cast<int>(v));

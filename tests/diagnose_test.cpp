@@ -122,6 +122,23 @@ TEST(Diagnose, NoncongruenceFoundWhereTheSensorResolvesIt) {
   });
 }
 
+// Paper 001's protocol: one load change (100 -> 50 g, and 50 -> 100 g), a damped voltage
+// oscillation at each load. The lonely stroke happens once per segment; the two segments'
+// first cycles sit in different folds, so every fold trains on one of them. Clean records of
+// the same protocol, and at one constant load (the file's single segment id is no fold), are
+// `none`.
+TEST(Diagnose, LonelyStrokeAfterOneLoadChange) {
+  for (const std::vector<double>& loads : {std::vector<double>{100, 50}, {50, 100}}) {
+    const auto protocol = [&](RigSpec& r) {
+      r.voltage.loads_g = loads;
+      r.voltage.cycles = 3;
+    };
+    expect_named("voltage", "lonely_stroke", {2}, protocol);
+    expect_named("voltage", "none", {1}, protocol);
+  }
+  expect_named("voltage", "none", {2}, [](RigSpec& r) { r.voltage.loads_g = {100}; });
+}
+
 TEST(Diagnose, VoltageTestsCleanKneeLonelyStroke) {
   expect_named("voltage", "none", {0});
   expect_named("voltage", "offset_nonlinearity", {2});

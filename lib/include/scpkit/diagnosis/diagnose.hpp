@@ -3,10 +3,11 @@
 // its gain on held-out data (SPEC.md "diagnose"; PHYSICS.md section 5).
 //
 // 1. Baseline, identified with held-out validation (never random rows):
-//    - load tests: a Preisach operator on the load; held out by blocks of whole cycles (or the
-//      file's segments); the first rise, until the load first reaches its maximum, only drives
-//      the memory (it depends on the unseen state before the test) and is neither fitted nor
-//      scored;
+//    - one record (a load test, or a drive at one constant load): a Preisach operator on the
+//      input; held out by blocks of whole cycles (or the file's segments, when there are two
+//      or more); on a load input the first rise, until the load first reaches its maximum,
+//      only drives the memory (it depends on the unseen state before the test, hysterons
+//      below the lowest load) and is neither fitted nor scored;
 //    - tests at several constant loads (voltage, power, temperature): the augmented model
 //      y = f1(F) + f2(F) H[v], H a Preisach operator; held out by load segment (each interior
 //      load in turn, predicted through the quadratic maps of the others).
@@ -58,7 +59,7 @@ struct Diagnosis {
 
 struct DiagnoseOptions {
   int folds = 5;
-  int permutations = 199;
+  int permutations = 999;     ///< resampling tests: p resolves 0.001, well below alpha
   double alpha = 0.01;        ///< significance level of each detector
   double gain_alpha = 0.05;   ///< the gain's test, after a significant residual signature
   double min_gain_pct = 5.0;  ///< an extension must gain at least this on held-out data
@@ -75,6 +76,9 @@ struct DiagnoseData {
   std::vector<double> output;   ///< response
   std::vector<double> load_N;   ///< tests at several constant loads: the load of each reading
   std::vector<int> segments;    ///< optional segment ids
+  /// The input is a load (its first rise depends on the unseen state before the test); false
+  /// for a drive (voltage, power, temperature) that starts from rest.
+  bool input_is_load = true;
 };
 
 /// IdentificationError when the data cannot be diagnosed (too few readings, no excitation,
