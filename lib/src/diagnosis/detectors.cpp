@@ -10,7 +10,6 @@
 
 #include "scpkit/error.hpp"
 #include "scpkit/hysteresis/preisach.hpp"
-#include "scpkit/identification/preisach_fit.hpp"
 #include "stats.hpp"
 
 namespace scpkit::diagnosis {

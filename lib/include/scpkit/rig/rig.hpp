@@ -15,8 +15,9 @@
 //   drift                     linear trend over the test, as a fraction of the strain range
 //   lonely_stroke             running-maximum offset, fraction of the range (training)
 //   outliers                  spike size in strain ranges, on ~1 % of readings
-//   minor_loop_noncongruence  a of the output-dependent loop height y + a R z^2, z = (y - y_0) / R
-//                             (y_0 the first reading, R the nominal strain range; a <= 1)
+//   minor_loop_noncongruence  a of the output-dependent loop height y + a R z^2,
+//                             z = max(0, (y - y_0) / R) (y_0 the first reading, R the nominal
+//                             strain range; a <= 1)
 //   load_shape_coupling       (voltage) h = (1 - w(F)) H[v] + w(F) H2[v], w = m (F - F_lo) / dF,
 //                             H2 a differently shaped operator normalised like H
 //   offset_nonlinearity       (voltage) knee k(F) = exp(-(F - F_lo) / (0.2 dF)) at low load:
