@@ -22,9 +22,14 @@ T pick(const std::array<T, N>& v, int index, std::uint64_t salt) {
 }  // namespace
 
 std::string Scenario::describe() const {
-  const std::string what = effect == "creep" ? fmt::format("creep {:g} (tau {:g} s)", magnitude,
-                                                           spec.effects.creep_tau_s)
-                                             : fmt::format("{} {:g}", effect, magnitude);
+  const std::string what =
+      effect == "creep"
+          ? fmt::format("creep {:g} (tau {:g} s)", magnitude, spec.effects.creep_tau_s)
+      : effect == "lonely_stroke" && side == "voltage"
+          ? fmt::format(
+                "lonely_stroke {:g} ({} after an increase)", magnitude,
+                spec.effects.lonely_sign_after_increase > 0.0 ? "same sign" : "opposite sign")
+          : fmt::format("{} {:g}", effect, magnitude);
   if (side == "load")
     return fmt::format("load {} seed {} noise {:g} mm, {} x{} spread {:g} per-hold {}{}", what,
                        spec.seed, spec.noise_mm, spec.protocol.shape, spec.protocol.cycles,
@@ -83,7 +88,11 @@ Scenario make_scenario(const std::string& side, const std::string& effect, int i
   RigEffects& e = r.effects;
   if (effect == "drift") e.drift = s.magnitude = m(0.03, 0.06, 0.12);
   if (effect == "outliers") e.outliers = s.magnitude = m(0.1, 0.2, 0.5);
-  if (effect == "lonely_stroke") e.lonely_stroke = s.magnitude = m(0.03, 0.06, 0.1);
+  if (effect == "lonely_stroke") {
+    e.lonely_stroke = s.magnitude = m(0.03, 0.06, 0.1);
+    // After a load increase: paper 001's opposite sign, or one sign throughout.
+    e.lonely_sign_after_increase = pick(std::array{-1.0, 1.0}, index, 11);
+  }
   if (effect == "creep") {
     e.creep = s.magnitude = m(0.1, 0.2, 0.4);
     e.creep_tau_s = (side == "load" ? r.protocol.dwell_s : r.voltage.dwell_s) *

@@ -120,6 +120,46 @@ TEST(Preisach, SaturationOutputsAreBiasMinusAndPlusTotalMass) {
   EXPECT_NEAR(model.step(s, 1e9), model.bias() + total, 1e-12);  // clamped to hi
 }
 
+// A grid reaching below the inputs has hysterons (beta below the smallest input) that switch
+// on the first rise and never back: from negative saturation the first stroke differs from
+// every later one (the virgin stroke, PHYSICS.md section 4). After one cycle lo -> hi -> lo
+// they are up from the start, and the response at the lowest input is the same before and
+// after any history inside [lo, hi]; on a grid starting at lo the state is negative saturation.
+TEST(Preisach, AfterACycleNoHysteronIsLeftForAFirstStroke) {
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<double> inside(0.3, 1.0);
+  int virgin_differs = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    const PreisachGrid grid{0.0, 1.0, 10};
+    const PreisachModel model = random_model(rng, grid);
+    PreisachState fresh = PreisachState::negative_saturation(grid);
+    PreisachState cycled = PreisachState::after_cycle(grid, 0.3, 1.0);
+    const double fresh_at_lo = model.step(fresh, 0.3), cycled_at_lo = model.step(cycled, 0.3);
+    for (int k = 0; k < 12; ++k) {
+      const double v = inside(rng);
+      model.step(fresh, v);
+      model.step(cycled, v);
+    }
+    model.step(fresh, 1.0);
+    model.step(cycled, 1.0);
+    // Back at the lowest input: the cycled state reads as it started; the fresh one does not
+    // (unless the random density left the strip below 0.3 empty).
+    ASSERT_NEAR(model.step(cycled, 0.3), cycled_at_lo, 1e-12);
+    const double fresh_back = model.step(fresh, 0.3);
+    ASSERT_NEAR(fresh_back, cycled_at_lo, 1e-12);  // both now hold the strip up
+    if (std::abs(fresh_back - fresh_at_lo) > 1e-9) ++virgin_differs;
+    // On a grid that starts at the lowest input, the cycle changes nothing.
+    const PreisachGrid tight{0.3, 1.0, 7};
+    const PreisachModel m2 = random_model(rng, tight);
+    PreisachState a = PreisachState::negative_saturation(tight);
+    PreisachState b = PreisachState::after_cycle(tight, 0.3, 1.0);
+    for (double v : random_history(rng, tight, 30))
+      ASSERT_NEAR(m2.step(a, v), m2.step(b, v), 1e-12);
+  }
+  EXPECT_GT(virgin_differs, 30);
+  EXPECT_THROW(PreisachState::after_cycle(PreisachGrid{0.0, 1.0, 4}, 0.5, 0.5), InvalidArgument);
+}
+
 TEST(Preisach, WipingOutErasesDominatedExtrema) {
   std::mt19937 rng(15);
   const PreisachGrid grid{0.0, 10.0, 8};

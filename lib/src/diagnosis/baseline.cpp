@@ -183,6 +183,7 @@ Baseline::Baseline(const Record& rec, const PreisachFitOptions& initial) : rec_(
   const PreisachFit full = [&] {
     if (!rec.several_loads) {
       PreisachFitOptions o = initial;
+      o.precondition = true;
       o.exclude.assign(rec.size(), 0);
       for (std::size_t t = 0; t < rec.size(); ++t)
         o.exclude[t] = rec.fold[t] == Record::kMemoryOnly ? 1 : 0;
@@ -200,10 +201,15 @@ Baseline::Baseline(const Record& rec, const PreisachFitOptions& initial) : rec_(
       for (std::size_t t = f; t < f + c; ++t) hn[t] = std::abs(b) > 0.0 ? (rec.y[t] - a) / b : 0.0;
     }
     PreisachFitOptions o = initial;
+    o.precondition = true;
     o.restart_at_blocks = true;
+    o.exclude.assign(rec.size(), 0);
+    for (std::size_t t = 0; t < rec.size(); ++t)
+      o.exclude[t] = rec.fold[t] == Record::kMemoryOnly ? 1 : 0;
     return fit_preisach(rec.u, hn, rec.seg, o);
   }();
   options_.restart_at_blocks = rec.several_loads;
+  options_.precondition = true;
   options_.levels = full.summary.levels;
   options_.smoothness = full.summary.smoothness;
   options_.grid_shifts = full.summary.grid_shifts;
@@ -231,7 +237,7 @@ FoldFit Baseline::fit(const std::vector<char>& train, const Variant& variant) co
   auto simulate = [&](const PreisachModel& m) {
     Eigen::VectorXd p(static_cast<Eigen::Index>(n));
     for (std::size_t s = 0; s < rec_.seg_first.size(); ++s) {
-      PreisachState st = PreisachState::negative_saturation(m.grid());
+      PreisachState st = PreisachState::after_cycle(m.grid(), *options_.lo, *options_.hi);
       for (std::size_t t = rec_.seg_first[s]; t < rec_.seg_first[s] + rec_.seg_count[s]; ++t)
         p[static_cast<Eigen::Index>(t)] = m.step(st, u[t]);
     }

@@ -75,19 +75,27 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   // Effects read off model-free signatures are named before those known only by a gain:
   // readings moving during holds (creep) and history-dependent loop shapes explain return-point
   // offsets too, so they come before the lonely stroke.
-  // With one reading per hold creep is known by its gain alone, and a slow Kelvin element
-  // takes up part of a drift: there a detected drift that gains more is named instead.
-  const Finding* drift = detected("drift");
-  for (const char* e : {"outliers", "creep", "minor_loop_noncongruence", "lonely_stroke"}) {
+  const Finding* creep = detected("creep");
+  const bool creep_seen_in_holds = creep && ctx.holds.available;
+  for (const char* e : {"outliers", "creep", "minor_loop_noncongruence"}) {
     const Finding* f = detected(e);
-    if (f && f->effect == "creep" && !ctx.holds.available && drift && drift->gain_pct > f->gain_pct)
-      continue;
+    if (f == creep && !creep_seen_in_holds) continue;
     if (!best) best = f;
   }
+  // With one reading per hold creep is known by its gain alone: a Kelvin element that starts
+  // afresh with each load also offsets the first rise, and a slow one takes up part of a drift,
+  // so there the larger held-out gain decides.
+  // The lonely stroke is named ahead of the gain-only effects when its model-free return-point
+  // offset is significant too (a trend within each segment gives the running-maximum term a
+  // gain, not that offset).
+  const Finding* lonely = detected("lonely_stroke");
+  const bool lonely_seen = lonely && ctx.return_point.running_max.available &&
+                           ctx.return_point.running_max.p_value < opt.alpha;
+  if (!best && lonely_seen && !(creep && creep->gain_pct > lonely->gain_pct)) best = lonely;
   const Finding* by_gain = nullptr;
   for (const Finding& f : d.findings) {
     if (!f.detected) continue;
-    if (f.effect == "offset_nonlinearity" && detected("lonely_stroke")) continue;
+    if (f.effect == "offset_nonlinearity" && lonely) continue;
     if (!by_gain || f.gain_pct > by_gain->gain_pct) by_gain = &f;
   }
   if (!best) best = by_gain;

@@ -69,29 +69,53 @@ Walk walk(const Record& rec) {
   return w;
 }
 
-// Least squares d ~ X (no intercept) with coefficient tests; the residual variance is not
-// taken below `var_floor` (the noise of a difference of two readings).
+// Least squares d ~ X (no intercept); the residual variance is not taken below `var_floor`
+// (the noise of a difference of two readings).
+struct Regression {
+  bool ok = false;
+  Eigen::VectorXd beta;
+  Eigen::MatrixXd cov;
+  Eigen::VectorXd diag;  // X'X diagonal
+  double var = 0.0;
+  Eigen::Index n = 0;
+};
+
+Regression least_squares(const Eigen::MatrixXd& X, const Eigen::VectorXd& d, double var_floor) {
+  Regression r;
+  r.n = X.rows();
+  const Eigen::Index m = X.cols();
+  if (r.n < m + 3) return r;
+  const Eigen::MatrixXd XtX = X.transpose() * X;
+  Eigen::LDLT<Eigen::MatrixXd> ldlt(XtX);
+  if (ldlt.info() != Eigen::Success) return r;
+  r.beta = ldlt.solve(X.transpose() * d);
+  const Eigen::VectorXd e = d - X * r.beta;
+  r.var = std::max(e.squaredNorm() / static_cast<double>(r.n - m), var_floor);
+  r.cov = r.var * ldlt.solve(Eigen::MatrixXd::Identity(m, m));
+  r.diag = XtX.diagonal();
+  r.ok = r.beta.allFinite() && r.cov.allFinite();
+  return r;
+}
+
+// Whether coefficient j is tested: a feature that hardly varies, or is confounded with another,
+// is not.
+bool testable(const Regression& r, Eigen::Index j) {
+  if (!r.ok || !(r.diag[j] > 0.0) || !(r.cov(j, j) > 0.0)) return false;
+  return r.cov(j, j) / r.var * r.diag[j] <= 25.0;
+}
+
+// Coefficient tests of d ~ X.
 std::vector<Signature> regress(const Eigen::MatrixXd& X, const Eigen::VectorXd& d,
                                double var_floor) {
   std::vector<Signature> out(static_cast<std::size_t>(X.cols()));
-  const Eigen::Index n = X.rows(), m = X.cols();
-  if (n < m + 3) return out;
-  const Eigen::MatrixXd XtX = X.transpose() * X;
-  Eigen::LDLT<Eigen::MatrixXd> ldlt(XtX);
-  if (ldlt.info() != Eigen::Success) return out;
-  const Eigen::VectorXd beta = ldlt.solve(X.transpose() * d);
-  const Eigen::VectorXd e = d - X * beta;
-  const double var = std::max(e.squaredNorm() / static_cast<double>(n - m), var_floor);
-  const Eigen::MatrixXd cov = var * ldlt.solve(Eigen::MatrixXd::Identity(m, m));
-  for (Eigen::Index j = 0; j < m; ++j) {
+  const Regression r = least_squares(X, d, var_floor);
+  for (Eigen::Index j = 0; r.ok && j < X.cols(); ++j) {
+    if (!testable(r, j)) continue;
     Signature& s = out[static_cast<std::size_t>(j)];
-    // A feature that hardly varies, or is confounded with another, is not tested.
-    const double rel = XtX(j, j) > 0.0 ? cov(j, j) / var * XtX(j, j) : 1e300;
-    if (!(XtX(j, j) > 0.0) || rel > 25.0) continue;
     s.available = true;
-    s.units = static_cast<int>(n);
-    s.estimate = beta[j];
-    s.z = beta[j] / std::sqrt(cov(j, j));
+    s.units = static_cast<int>(r.n);
+    s.estimate = r.beta[j];
+    s.z = r.beta[j] / std::sqrt(r.cov(j, j));
     s.p_value = normal_two_sided(s.z);
   }
   return out;
@@ -102,9 +126,12 @@ std::vector<Signature> regress(const Eigen::MatrixXd& X, const Eigen::VectorXd& 
 ReturnPointSignatures return_point_signatures(const Record& rec, double sigma) {
   const Walk w = walk(rec);
   // Consecutive readings of one memory state (within a segment: across load segments the
-  // maps differ), the later against the earlier.
+  // maps differ), the later against the earlier. The growth of the running maximum between
+  // them is split by the segment's load change: the first segment and those after a decrease,
+  // and those after an increase, whose lonely stroke may have either sign (paper 001 leaves
+  // the increase open; PHYSICS.md section 4).
   std::map<std::vector<long>, std::size_t> last;
-  std::vector<double> dm, dt, d;
+  std::vector<double> dm_down, dm_up, dt, d;
   for (std::size_t i = 0; i < w.idx.size(); ++i) {
     const auto [it, fresh] = last.try_emplace(w.key[i], i);
     if (fresh) continue;
@@ -112,30 +139,68 @@ ReturnPointSignatures return_point_signatures(const Record& rec, double sigma) {
     it->second = i;
     const std::size_t a = w.idx[j], b = w.idx[i];
     const auto s = static_cast<std::size_t>(rec.seg[b]);
-    // The lonely stroke's sign: + in the first segment and after a load decrease, - after an
-    // increase (as the lonely_stroke extension).
-    const double sign =
-        rec.several_loads && s > 0 && rec.seg_load[s] > rec.seg_load[s - 1] ? -1.0 : 1.0;
-    dm.push_back(sign * (w.running_max[i] - w.running_max[j]) / w.span);
+    const bool after_increase = rec.several_loads && s > 0 && rec.seg_load[s] > rec.seg_load[s - 1];
+    const double growth = (w.running_max[i] - w.running_max[j]) / w.span;
+    dm_down.push_back(after_increase ? 0.0 : growth);
+    dm_up.push_back(after_increase ? growth : 0.0);
     dt.push_back((rec.time[b] - rec.time[a]) / w.duration);
     d.push_back(rec.y[b] - rec.y[a]);
   }
   ReturnPointSignatures out;
-  const auto n = static_cast<Eigen::Index>(d.size());
-  Eigen::MatrixXd X(n, 2);
-  Eigen::VectorXd y(n);
-  for (Eigen::Index k = 0; k < n; ++k) {
-    X(k, 0) = dm[static_cast<std::size_t>(k)];
-    X(k, 1) = dt[static_cast<std::size_t>(k)];
-    y[k] = d[static_cast<std::size_t>(k)];
-  }
-  const std::vector<Signature> s = regress(X, y, 2.0 * sigma * sigma);
-  out.running_max = s[0];
-  out.time = s[1];
   out.running_max.what =
       "readings in the same memory state, before and after the running "
       "maximum of the input grew";
   out.time.what = "readings in the same memory state, apart in time";
+  // Columns that never vary are dropped (a class without pairs).
+  std::vector<const std::vector<double>*> cols;
+  for (const auto* c : {&dm_down, &dm_up}) {
+    if (std::any_of(c->begin(), c->end(), [](double v) { return v != 0.0; })) cols.push_back(c);
+  }
+  const auto n = static_cast<Eigen::Index>(d.size());
+  const auto m = static_cast<Eigen::Index>(cols.size());
+  Eigen::MatrixXd X(n, m + 1);
+  Eigen::VectorXd y(n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const auto kk = static_cast<std::size_t>(k);
+    for (Eigen::Index j = 0; j < m; ++j) X(k, j) = (*cols[static_cast<std::size_t>(j)])[kk];
+    X(k, m) = dt[kk];
+    y[k] = d[kk];
+  }
+  const double var_floor = 2.0 * sigma * sigma;
+  const Regression r = least_squares(X, y, var_floor);
+  const std::vector<Signature> s = regress(X, y, var_floor);
+  const std::string what_rm = out.running_max.what, what_t = out.time.what;
+  out.time = s[static_cast<std::size_t>(m)];
+  out.time.what = what_t;
+  // The running-maximum classes tested jointly (Wald, chi-square with one degree of freedom per
+  // class); the estimate and z reported are the stronger class's.
+  std::vector<Eigen::Index> tested;
+  for (Eigen::Index j = 0; j < m; ++j) {
+    if (testable(r, j)) tested.push_back(j);
+  }
+  if (!tested.empty()) {
+    const auto q = static_cast<Eigen::Index>(tested.size());
+    Eigen::VectorXd b(q);
+    Eigen::MatrixXd C(q, q);
+    for (Eigen::Index i = 0; i < q; ++i) {
+      b[i] = r.beta[tested[static_cast<std::size_t>(i)]];
+      for (Eigen::Index k = 0; k < q; ++k)
+        C(i, k) = r.cov(tested[static_cast<std::size_t>(i)], tested[static_cast<std::size_t>(k)]);
+    }
+    const double wald = b.dot(C.ldlt().solve(b));
+    Signature& rm = out.running_max;
+    const Signature* strongest = nullptr;
+    for (Eigen::Index j : tested) {
+      const Signature& c = s[static_cast<std::size_t>(j)];
+      if (!strongest || std::abs(c.z) > std::abs(strongest->z)) strongest = &c;
+    }
+    rm = *strongest;
+    rm.what = what_rm;
+    // Chi-square upper tail: one class, the normal two-sided; two, exactly exp(-W / 2).
+    rm.p_value = !std::isfinite(wald) ? 1.0
+                 : q == 1             ? normal_two_sided(std::sqrt(std::max(wald, 0.0)))
+                                      : std::exp(-0.5 * std::max(wald, 0.0));
+  }
   return out;
 }
 

@@ -28,6 +28,14 @@ PreisachState PreisachState::negative_saturation(const PreisachGrid& grid) {
   return PreisachState(grid.lo, grid.hi);
 }
 
+PreisachState PreisachState::after_cycle(const PreisachGrid& grid, double lo, double hi) {
+  PreisachState s = negative_saturation(grid);
+  if (!(lo < hi)) throw_invalid("PreisachState::after_cycle: needs lo < hi");
+  s.apply(hi);
+  s.apply(lo);
+  return s;
+}
+
 PreisachState PreisachState::positive_saturation(const PreisachGrid& grid) {
   PreisachState s = negative_saturation(grid);
   s.points_.push_back(grid.hi);

@@ -8,6 +8,8 @@
 #include <limits>
 #include <map>
 #include <numeric>
+#include <optional>
+#include <utility>
 
 #include "scpkit/error.hpp"
 
@@ -55,17 +57,21 @@ Eigen::MatrixXd smoothness_penalty(const PreisachGrid& grid) {
 Design make_design(const PreisachGrid& grid, int sign, std::span<const double> input,
                    std::span<const double> output, const std::vector<int>& block_of, int nblocks,
                    bool with_rank, bool restart, const std::vector<int>& segment_of,
-                   const std::function<void(Eigen::Ref<Eigen::VectorXd>)>& filter) {
+                   const std::function<void(Eigen::Ref<Eigen::VectorXd>)>& filter,
+                   const std::optional<std::pair<double, double>>& cycle) {
   Design d;
   d.grid = grid;
   const auto n = static_cast<Eigen::Index>(input.size());
   const int p = grid.cells();
-  PreisachState state = PreisachState::negative_saturation(grid);
+  auto initial = [&] {
+    return cycle ? PreisachState::after_cycle(grid, cycle->first, cycle->second)
+                 : PreisachState::negative_saturation(grid);
+  };
+  PreisachState state = initial();
   d.A.resize(n, p + 1);
   Eigen::VectorXd row(p);
   for (Eigen::Index t = 0; t < n; ++t) {
-    if (restart && t > 0 && segment_of[t] != segment_of[t - 1])
-      state = PreisachState::negative_saturation(grid);
+    if (restart && t > 0 && segment_of[t] != segment_of[t - 1]) state = initial();
     state.apply(input[t]);
     signed_area_fractions(grid, state, row);
     d.A.row(t).head(p) = row.transpose() * static_cast<double>(sign);
@@ -348,12 +354,14 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
 
   const int S = options.grid_shifts;
   const bool restart = options.restart_at_blocks && !blocks.empty();
+  std::optional<std::pair<double, double>> cycle;
+  if (options.precondition) cycle = std::pair{base.lo, base.hi};
   auto designs_for = [&](int L, bool with_rank) {
     std::vector<Design> shifts;
     for (int k = 0; k < S; ++k) {
       shifts.push_back(make_design(shifted_grid(base, L, k, S), sign, input, output, block_of,
                                    nblocks, with_rank && k == 0, restart, segment_of,
-                                   options.output_filter));
+                                   options.output_filter, cycle));
     }
     return shifts;
   };

@@ -66,6 +66,8 @@ void RigSpec::validate() const {
     if (!(v >= 0.0) || !std::isfinite(v))
       throw_invalid("effect magnitudes must be finite and >= 0");
   }
+  if (e.lonely_sign_after_increase != 1.0 && e.lonely_sign_after_increase != -1.0)
+    throw_invalid("lonely_sign_after_increase must be -1 or +1");
   if (e.creep > 1.0) throw_invalid("creep is a fraction of the strain, <= 1");
   if (e.minor_loop_noncongruence > 1.0)
     throw_invalid("minor_loop_noncongruence must be <= 1 (the output map stays monotone)");
@@ -158,13 +160,16 @@ RigSpec load_rig_spec(const std::filesystem::path& path) {
     s.noise_mm = r.number(*p, "noise_mm", s.noise_mm, 0.0);
   }
   if (const toml::table* p = r.table(root, "effects")) {
-    r.only_keys(*p, {"creep", "creep_tau_s", "drift", "lonely_stroke", "outliers",
-                     "minor_loop_noncongruence", "load_shape_coupling", "offset_nonlinearity"});
+    r.only_keys(
+        *p, {"creep", "creep_tau_s", "drift", "lonely_stroke", "lonely_sign_after_increase",
+             "outliers", "minor_loop_noncongruence", "load_shape_coupling", "offset_nonlinearity"});
     RigEffects& e = s.effects;
     e.creep = r.number(*p, "creep", 0.0, 0.0);
     e.creep_tau_s = r.positive(*p, "creep_tau_s", e.creep_tau_s, false);
     e.drift = r.number(*p, "drift", 0.0, 0.0);
     e.lonely_stroke = r.number(*p, "lonely_stroke", 0.0, 0.0);
+    e.lonely_sign_after_increase =
+        r.number(*p, "lonely_sign_after_increase", e.lonely_sign_after_increase, -1.0);
     e.outliers = r.number(*p, "outliers", 0.0, 0.0);
     e.minor_loop_noncongruence = r.number(*p, "minor_loop_noncongruence", 0.0, 0.0);
     e.load_shape_coupling = r.number(*p, "load_shape_coupling", 0.0, 0.0);

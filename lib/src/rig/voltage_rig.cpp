@@ -119,10 +119,11 @@ RigRun run_voltage_rig(const RigSpec& spec) {
           y = (1.0 - e.creep) * y + e.creep * viscous;
         }
         // Lonely stroke, re-armed at every load change: the first rise differs from later
-        // cycles; after a load increase the repeatable loop lies on the other side (paper
-        // 001's open case), so the offset changes sign.
+        // cycles; after a load increase the repeatable loop may lie on the other side (paper
+        // 001's open case, the default), so the offset may change sign.
         running_max = std::max(running_max, v_one[i]);
-        const double lonely_sign = k > 0 && p.loads_g[k] > p.loads_g[k - 1] ? -1.0 : 1.0;
+        const double lonely_sign =
+            k > 0 && p.loads_g[k] > p.loads_g[k - 1] ? e.lonely_sign_after_increase : 1.0;
         y -= lonely_sign * e.lonely_stroke * f2 * running_max / p.v_max;
         time_s.push_back(t);
         dwell_col.push_back(hold * j / p.readings_per_hold);

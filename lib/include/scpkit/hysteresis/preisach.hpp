@@ -56,6 +56,11 @@ class PreisachState {
   /// A given memory: lo, then alternating dominant maxima and minima, ending with the current
   /// input. Throws InvalidArgument unless the sequence is alternating and dominant.
   static PreisachState from_turning_points(const PreisachGrid& grid, std::vector<double> points);
+  /// Negative saturation, then one excursion lo -> hi -> lo (lo < hi inside the grid): a
+  /// preconditioned specimen. On a grid reaching below the inputs (lo > grid.lo), the
+  /// hysterons below lo are up from the start instead of switching on the first rise, so the
+  /// operator has no first-stroke (virgin) term: the conventional plane of PHYSICS.md section 4.
+  static PreisachState after_cycle(const PreisachGrid& grid, double lo, double hi);
 
   /// Back to negative saturation on `grid`, keeping the allocated memory (for loops that
   /// evaluate many designs with one state).

@@ -42,6 +42,11 @@ struct PreisachFitOptions {
   /// Restart the memory (negative saturation) at the start of every given block: segments
   /// that are separate tests, e.g. the constant-load segments of an augmented model.
   bool restart_at_blocks = false;
+  /// Start the memory (and every restart) after one excursion lo -> hi -> lo
+  /// (PreisachState::after_cycle): the shifted grids' hysterons below the smallest input then
+  /// give no first-stroke term, so the model is the conventional plane over the tested inputs.
+  /// diagnose's baseline, whose lonely-stroke extension adds that term explicitly.
+  bool precondition = false;
   /// Rows to leave out of the least squares (non-zero entries) while their inputs still drive
   /// the memory: held-out validation on one record. Empty = use every row.
   std::vector<char> exclude;

@@ -82,6 +82,10 @@ struct RigEffects {
   double creep_tau_s = 60.0;
   double drift = 0.0;
   double lonely_stroke = 0.0;
+  /// Voltage tests: the lonely stroke's sign after a load increase, relative to the first load
+  /// and to decreases: -1 (paper 001's open case: the repeatable loop lies on the other side)
+  /// or +1 (one sign throughout).
+  double lonely_sign_after_increase = -1.0;
   double outliers = 0.0;
   double minor_loop_noncongruence = 0.0;
   double load_shape_coupling = 0.0;  ///< voltage tests: normalised loop shape changes with load

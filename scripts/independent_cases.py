@@ -1,0 +1,208 @@
+#!/usr/bin/env python3
+"""Test files for `scpkit diagnose` from a generator independent of the project's rig.
+
+Usage: scripts/independent_cases.py OUT_DIR N [FIRST]   (N files per effect and side, seeds
+FIRST..FIRST+N-1; file names SIDE-EFFECT-I.csv carry the truth). Then
+scripts/independent_run.sh OUT_DIR prints one line per file: name, truth, named cause.
+
+Written apart from lib/src/rig (plain Python, no numpy): a relay-grid Preisach truth with a
+Gaussian-ridge density plus a linear term, protocols from 0 g (damped, repeated, minor loops
+from two histories), the response in mm with optional quantisation; the effects as a reader
+of PHYSICS.md section 5 might build them: a Kelvin element (readings during holds), a linear
+drift, spikes, a moving Preisach (non-congruence), a lonely stroke of one sign after every load
+change, an input-exponent shape change with load, a low-load knee in the offset map."""
+import math, random, sys, os
+
+class Preisach:
+    def __init__(self, lo, hi, n, dens):
+        self.lo, self.hi, self.n = lo, hi, n
+        h = (hi - lo) / n
+        self.cells = []
+        for i in range(n):
+            a = lo + (i + 0.5) * h
+            for j in range(i + 1):
+                b = lo + (j + 0.5) * h
+                self.cells.append([a, b, dens(a, b) * h * h, -1])
+    def reset(self):
+        for c in self.cells: c[3] = -1
+    def step(self, u):
+        s = 0.0
+        for c in self.cells:
+            if u >= c[0]: c[3] = 1
+            elif u <= c[1]: c[3] = -1
+            s += c[2] * c[3]
+        return s
+
+def density(spread, centre, width):
+    return lambda a, b: math.exp(-((a - b) / spread) ** 2) * math.exp(-(((a + b) / 2 - centre) / width) ** 2) + 0.15
+
+def quant(v, q):
+    return round(v / q) * q if q > 0 else v
+
+class Hold:
+    """The readings of one hold: a Kelvin element (creep) and a linear drift on the value g."""
+    def __init__(self, effect, mag, tau, drift_size, total_t):
+        self.effect, self.mag, self.tau = effect, mag, tau
+        self.drift_size, self.total_t, self.kel, self.t = drift_size, total_t, None, 0.0
+    def restart(self):
+        self.kel = None
+    def readings(self, g, per_hold, dwell):
+        out = []
+        for r in range(per_hold):
+            dt = dwell / per_hold
+            self.t += dt
+            y = g
+            if self.effect == "creep":
+                if self.kel is None: self.kel = g
+                self.kel = g + (self.kel - g) * math.exp(-dt / self.tau)
+                y = (1 - self.mag) * g + self.mag * self.kel
+            if self.effect == "drift":
+                y += self.mag * self.drift_size * self.t / self.total_t
+            out.append((self.t, dwell * (r + 1) / per_hold, y))
+        return out
+
+def load_protocol(rng, kind, umax, step):
+    seq = []
+    def ramp(a, b):
+        n = max(1, int(round(abs(b - a) / step)))
+        return [a + (b - a) * k / n for k in range(1, n + 1)]
+    u = 0.0
+    seq.append(0.0)
+    if kind == "damped":
+        for amp in [1.0, 0.8, 0.6, 0.45, 0.3]:
+            seq += ramp(u, amp * umax); u = amp * umax
+            seq += ramp(u, 0.0); u = 0.0
+        seq += ramp(u, umax); u = umax; seq += ramp(u, 0.0)
+    elif kind == "repeated":
+        for _ in range(6):
+            seq += ramp(u, umax); u = umax
+            seq += ramp(u, 0.0); u = 0.0
+    else:  # minor loops between the same extrema from different histories
+        lo_m, hi_m = 0.35 * umax, 0.7 * umax
+        for _ in range(2):
+            seq += ramp(u, umax); u = umax
+            seq += ramp(u, lo_m); u = lo_m
+            seq += ramp(u, hi_m); u = hi_m
+            seq += ramp(u, lo_m); u = lo_m
+            seq += ramp(u, 0.0); u = 0.0
+            seq += ramp(u, hi_m); u = hi_m
+            seq += ramp(u, lo_m); u = lo_m
+            seq += ramp(u, hi_m); u = hi_m
+            seq += ramp(u, 0.0); u = 0.0
+    return seq
+
+def make_load(rng, effect, mag, out):
+    umax = rng.choice([250.0, 300.0, 400.0])
+    step = umax / rng.choice([8, 10, 12])
+    kind = "minor" if effect == "minor_loop_noncongruence" else rng.choice(["damped", "repeated", "minor"])
+    seq = load_protocol(rng, kind, umax, step)
+    P = Preisach(0.0, umax * 1.001, 30, density(umax * rng.uniform(0.15, 0.4), umax * rng.uniform(0.3, 0.6), umax * 0.5))
+    lin = rng.uniform(0.3, 0.8)
+    # scale: total range about 2.5-4 mm
+    raw = []
+    for u in seq: raw.append(P.step(u))
+    P.reset()
+    rmin, rmax = min(raw), max(raw)
+    target = rng.uniform(2.5, 4.0)
+    k_h = target * (1 - lin) / (rmax - rmin)
+    k_l = target * lin / umax
+    per_hold = 3 if effect == "creep" or rng.random() < 0.3 else 1
+    dwell = rng.choice([30.0, 60.0, 120.0])
+    noise = rng.choice([0.005, 0.01, 0.02])
+    q = rng.choice([0.0, 0.01, 0.04])
+    tau = dwell * rng.uniform(0.3, 1.0)
+    rows = []
+    yprev = 0.0
+    hold = Hold(effect, mag, tau, target, len(seq) * dwell)
+    for i, u in enumerate(seq):
+        ue = u
+        if effect == "minor_loop_noncongruence":
+            ue = u + mag * umax * (yprev / target)
+        g = k_l * u + k_h * (P.step(ue) - rmin)
+        yprev = g
+        for tt, dw, y in hold.readings(g, per_hold, dwell):
+            rows.append([tt, dw, u, y])
+    if effect == "outliers":
+        for _ in range(rng.choice([2, 3, 4])):
+            k = rng.randrange(5, len(rows) - 5)
+            rows[k][3] += rng.choice([-1, 1]) * mag * target
+    with open(out, "w") as f:
+        f.write("# specimen: thread\n# length_mm: 100\n# plies: 2\n")
+        f.write(f"# gen: {effect} {mag} kind {kind} noise {noise} q {q} per_hold {per_hold} tau {tau:.0f} dwell {dwell}\n")
+        f.write("time_s,dwell_s,load_g,disp_mm\n")
+        for tt, dw, u, y in rows:
+            f.write(f"{tt:.1f},{dw:.1f},{u:.3f},{quant(y + rng.gauss(0, noise), q):.4f}\n")
+
+def make_voltage(rng, effect, mag, out):
+    loads = rng.choice([[30, 40, 50, 60, 70, 80, 90, 100], [25, 40, 55, 70, 85, 100], [30, 45, 60, 75, 90, 105, 120]])
+    if rng.random() < 0.5:
+        loads = loads[:]; rng.shuffle(loads)
+    vmax = rng.choice([6.0, 8.0, 10.0])
+    steps = rng.choice([6, 8, 10])
+    P = Preisach(0.0, vmax * 1.001, 24, density(vmax * rng.uniform(0.1, 0.3), vmax * rng.uniform(0.5, 0.7), vmax * 0.4))
+    dwell = rng.choice([10.0, 30.0, 60.0])
+    noise = rng.choice([0.005, 0.01, 0.02])
+    q = rng.choice([0.0, 0.01, 0.04])
+    per_hold = 3 if effect == "creep" else 1
+    tau = dwell * rng.uniform(0.3, 1.0)
+    L = 70.0
+    seq = []
+    for amp in [1.0, 0.75, 0.5] if rng.random() < 0.5 else [1.0, 1.0, 1.0]:
+        for k in range(1, steps + 1): seq.append(amp * vmax * k / steps)
+        for k in range(steps - 1, -1, -1): seq.append(amp * vmax * k / steps)
+    seq = [0.0] + seq
+    ref = [P.step(v) for v in seq]; P.reset()
+    hmin, hmax = min(ref), max(ref)
+    rows = []
+    Fmin, Fmax = min(loads), max(loads)
+    hold = Hold(effect, mag, tau, 0.06 * L, len(loads) * len(seq) * dwell)
+    for s, Fg in enumerate(loads):
+        F = Fg * 9.81e-3
+        x = (Fg - Fmin) / (Fmax - Fmin)
+        f1 = L * (0.02 + 0.05 * x - 0.01 * x * x)  # elongation under load (mm)
+        if effect == "offset_nonlinearity":
+            f1 -= mag * L * 0.05 * math.exp(-(Fg - Fmin) / ((Fmax - Fmin) * 0.12))
+        f2 = L * (0.03 + 0.03 * x - 0.012 * x * x)  # stroke (mm)
+        P.reset()
+        hold.restart()
+        M = 0.0
+        for i, v in enumerate(seq):
+            ve = v
+            if effect == "load_shape_coupling":
+                ve = vmax * (v / vmax) ** (1.0 + mag * (x - 0.5))
+            h = (P.step(ve) - hmin) / (hmax - hmin)
+            M = max(M, v)
+            g = f1 - f2 * h
+            if effect == "lonely_stroke":
+                g -= mag * f2 * M / vmax
+            for tt, dw, y in hold.readings(g, per_hold, dwell):
+                rows.append([tt, dw, s, Fg, v, y])
+    if effect == "outliers":
+        for _ in range(rng.choice([2, 3, 4])):
+            k = rng.randrange(5, len(rows) - 5)
+            rows[k][5] += rng.choice([-1, 1]) * mag * 0.05 * L
+    with open(out, "w") as f:
+        f.write(f"# specimen: scp\n# length_mm: {L}\n")
+        f.write(f"# gen: {effect} {mag} loads {loads} noise {noise} q {q} tau {tau:.0f} dwell {dwell}\n")
+        f.write("time_s,dwell_s,segment,load_g,voltage_V,disp_mm\n")
+        for tt, dw, s, Fg, v, y in rows:
+            f.write(f"{tt:.1f},{dw:.1f},{s},{Fg},{v:.4f},{quant(y + rng.gauss(0, noise), q):.4f}\n")
+
+MAGS = {
+    "none": [0], "drift": [0.03, 0.06, 0.12], "outliers": [0.05, 0.1, 0.2],
+    "creep": [0.1, 0.2, 0.4], "minor_loop_noncongruence": [0.1, 0.2, 0.3],
+    "lonely_stroke": [0.03, 0.06, 0.1], "load_shape_coupling": [0.3, 0.6, 1.0],
+    "offset_nonlinearity": [0.05, 0.1, 0.2],
+}
+if __name__ == "__main__":
+    outdir, n = sys.argv[1], int(sys.argv[2])
+    first = int(sys.argv[3]) if len(sys.argv) > 3 else 0
+    os.makedirs(outdir, exist_ok=True)
+    for side, effects in [("load", ["none", "drift", "outliers", "creep", "minor_loop_noncongruence"]),
+                          ("voltage", ["none", "drift", "outliers", "creep", "lonely_stroke", "load_shape_coupling", "offset_nonlinearity"])]:
+        for e in effects:
+            for i in range(first, first + n):
+                rng = random.Random(i * 7919 + len(e) * 31 + (0 if side == "load" else 100000))
+                mag = MAGS[e][i % len(MAGS[e])]
+                out = os.path.join(outdir, f"{side}-{e}-{i}.csv")
+                (make_load if side == "load" else make_voltage)(rng, e, mag, out)
