@@ -571,22 +571,41 @@ Finding detect_lonely_stroke(Context& ctx) {
           }
           uniform = rising[0] > 0 && rising[1] > 0 && xr[0] * xr[1] > 0.0;
         }
-        std::vector<Term> candidates{{}};
-        for (double lambda : {-0.15, -0.08, -0.04, -0.02, 0.02, 0.04, 0.08, 0.15})
+        std::vector<Term> candidates;
+        for (double lambda : {-0.15, -0.08, -0.04, -0.02, 0.0, 0.02, 0.04, 0.08, 0.15})
           candidates.push_back({lambda, uniform});
-        double best = std::numeric_limits<double>::infinity();
-        Term best_c;
-        for (const Term& c : candidates) {
+        auto sse = [&](const Term& c) {
           const std::vector<double> y = shifted(c);
           const std::vector<double> p =
               c.lambda == 0.0 ? base.pred : ctx.base.fit(train, {{}, &y, true}).pred;
-          const double ss = training_sse(y, p, train);
-          if (ss < best * (1.0 - 1e-9)) {
-            best = ss;
-            best_c = c;
+          return training_sse(y, p, train);
+        };
+        std::vector<double> ss;
+        std::size_t i_best = 0;
+        for (std::size_t i = 0; i < candidates.size(); ++i) {
+          ss.push_back(sse(candidates[i]));
+          if (ss[i] < ss[i_best] * (1.0 - 1e-9)) i_best = i;
+        }
+        Term best_c = candidates[i_best];
+        // Between grid values: the vertex of the parabola through the best and its two
+        // neighbours (one more fit), where none of the three is lambda = 0 (the baseline's
+        // own fit, on four grids, is not like for like with the one-grid candidates). Measured
+        // on an independent generator's lonely strokes of 0.06: lambda 0.04 or 0.08 per fold
+        // left a Kelvin creep element gaining more than the term.
+        if (i_best > 0 && i_best + 1 < candidates.size() && candidates[i_best - 1].lambda != 0.0 &&
+            candidates[i_best].lambda != 0.0 && candidates[i_best + 1].lambda != 0.0) {
+          const double x0 = candidates[i_best - 1].lambda, x1 = best_c.lambda,
+                       x2 = candidates[i_best + 1].lambda;
+          const double s0 = ss[i_best - 1], s1 = ss[i_best], s2 = ss[i_best + 1];
+          const double den = (x1 - x0) * (s1 - s2) - (x1 - x2) * (s1 - s0);
+          if (den != 0.0) {
+            const double v =
+                x1 -
+                0.5 * ((x1 - x0) * (x1 - x0) * (s1 - s2) - (x1 - x2) * (x1 - x2) * (s1 - s0)) / den;
+            if (v > x0 && v < x2 && v != x1 && sse({v, uniform}) < s1) best_c.lambda = v;
           }
         }
-        chosen += fmt::format("{}{:+g}{}", chosen.empty() ? "" : ", ", best_c.lambda,
+        chosen += fmt::format("{}{:+.3g}{}", chosen.empty() ? "" : ", ", best_c.lambda,
                               best_c.uniform ? " one sign" : "");
         if (best_c.lambda == 0.0) return base.pred;
         const std::vector<double> y = shifted(best_c);
