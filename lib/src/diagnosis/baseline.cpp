@@ -122,8 +122,8 @@ Record make_record(const DiagnoseData& data, const DiagnoseOptions& opt) {
     // The first rise, until the input first reaches its maximum, depends on the state the
     // specimen was in before the test, which no reading shows (the baseline starts
     // preconditioned, PreisachState::after_cycle; the rig's truth and real specimens carry
-    // cells below the lowest input, PHYSICS.md section 4). It sets the memory and is neither fitted nor scored:
-    // measured, it held 80 % of the clean rig records' training error and drove every
+    // cells below the lowest input, PHYSICS.md section 4). It sets the memory and is neither fitted
+    // nor scored: measured, it held 80 % of the clean rig records' training error and drove every
     // extension's choice of parameters.
     const double umax = *std::max_element(rec.u.begin(), rec.u.end());
     const double tol = 1e-9 * std::max(1.0, std::abs(umax));
