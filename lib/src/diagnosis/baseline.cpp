@@ -180,13 +180,14 @@ MapFit fit_maps(const std::vector<double>& F, const std::vector<double>& a,
 }
 
 Baseline::Baseline(const Record& rec, const PreisachFitOptions& initial) : rec_(rec) {
+  // Memory-only rows drive the operator but are not fitted; every fit starts preconditioned.
+  PreisachFitOptions o = initial;
+  o.precondition = true;
+  o.exclude.assign(rec.size(), 0);
+  for (std::size_t t = 0; t < rec.size(); ++t)
+    o.exclude[t] = rec.fold[t] == Record::kMemoryOnly ? 1 : 0;
   const PreisachFit full = [&] {
     if (!rec.several_loads) {
-      PreisachFitOptions o = initial;
-      o.precondition = true;
-      o.exclude.assign(rec.size(), 0);
-      for (std::size_t t = 0; t < rec.size(); ++t)
-        o.exclude[t] = rec.fold[t] == Record::kMemoryOnly ? 1 : 0;
       return fit_preisach(rec.u, rec.y, {}, o);
     }
     // Normalised data from a first guess of each segment's offset and range (a line in v).
@@ -200,12 +201,7 @@ Baseline::Baseline(const Record& rec, const PreisachFitOptions& initial) : rec_(
       const auto [a, b] = line_fit(us, ys);
       for (std::size_t t = f; t < f + c; ++t) hn[t] = std::abs(b) > 0.0 ? (rec.y[t] - a) / b : 0.0;
     }
-    PreisachFitOptions o = initial;
-    o.precondition = true;
     o.restart_at_blocks = true;
-    o.exclude.assign(rec.size(), 0);
-    for (std::size_t t = 0; t < rec.size(); ++t)
-      o.exclude[t] = rec.fold[t] == Record::kMemoryOnly ? 1 : 0;
     return fit_preisach(rec.u, hn, rec.seg, o);
   }();
   options_.restart_at_blocks = rec.several_loads;

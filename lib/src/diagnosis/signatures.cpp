@@ -104,12 +104,10 @@ bool testable(const Regression& r, Eigen::Index j) {
   return r.cov(j, j) / r.var * r.diag[j] <= 25.0;
 }
 
-// Coefficient tests of d ~ X.
-std::vector<Signature> regress(const Eigen::MatrixXd& X, const Eigen::VectorXd& d,
-                               double var_floor) {
-  std::vector<Signature> out(static_cast<std::size_t>(X.cols()));
-  const Regression r = least_squares(X, d, var_floor);
-  for (Eigen::Index j = 0; r.ok && j < X.cols(); ++j) {
+// Coefficient tests of a fitted regression with `m` columns.
+std::vector<Signature> coefficient_tests(const Regression& r, Eigen::Index m) {
+  std::vector<Signature> out(static_cast<std::size_t>(m));
+  for (Eigen::Index j = 0; r.ok && j < m; ++j) {
     if (!testable(r, j)) continue;
     Signature& s = out[static_cast<std::size_t>(j)];
     s.available = true;
@@ -119,6 +117,12 @@ std::vector<Signature> regress(const Eigen::MatrixXd& X, const Eigen::VectorXd& 
     s.p_value = normal_two_sided(s.z);
   }
   return out;
+}
+
+// Coefficient tests of d ~ X.
+std::vector<Signature> regress(const Eigen::MatrixXd& X, const Eigen::VectorXd& d,
+                               double var_floor) {
+  return coefficient_tests(least_squares(X, d, var_floor), X.cols());
 }
 
 }  // namespace
@@ -168,7 +172,7 @@ ReturnPointSignatures return_point_signatures(const Record& rec, double sigma) {
   }
   const double var_floor = 2.0 * sigma * sigma;
   const Regression r = least_squares(X, y, var_floor);
-  const std::vector<Signature> s = regress(X, y, var_floor);
+  const std::vector<Signature> s = coefficient_tests(r, X.cols());
   const std::string what_rm = out.running_max.what, what_t = out.time.what;
   out.time = s[static_cast<std::size_t>(m)];
   out.time.what = what_t;
