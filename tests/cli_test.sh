@@ -147,6 +147,8 @@ check "sweep spec errors are located" 3 "bad-sweep.toml:3:13: 'plies' must hold 
 printf '[protocol]\nshape = "zigzag"\n' >"$work/bad-shape.toml"
 check "rig protocol shape errors are located" 3 "bad-shape.toml:2:9: 'shape' must be damped or repeated" -- "$bin" simulate "$work/bad-shape.toml" -o "$work/bad-shape.csv"
 assert "no output on a bad rig description" test ! -e "$work/bad-shape.csv"
+printf 'test = "voltage"\n[voltage]\nshape = "ramp"\n' >"$work/bad-vshape.toml"
+check "rig voltage shape errors are located" 3 "bad-vshape.toml:3:9: 'shape' must be damped or repeated" -- "$bin" simulate "$work/bad-vshape.toml" -o "$work/bad-vshape.csv"
 
 # diagnose: SPEC's JSON keys; drift hidden in rig data is named.
 printf 'specimen = "thread"\nseed = 11\n[effects]\ndrift = 0.05\n' >"$work/drift.toml"

@@ -276,6 +276,48 @@ std::vector<std::vector<double>> voltage_rows(const RigEffects& e, double spread
   return run_rig(s, card()).rows;
 }
 
+// The repeated voltage protocol: full cycles 0 -> v_max -> 0 V at each load, nothing appended;
+// its response returns to the same value at every 0 V reading after the first cycle (clean
+// truth, wiping-out), and with a lonely stroke every later 0 V reading sits off the first.
+TEST(Rig, RepeatedVoltageCyclesReturnToZeroVolts) {
+  RigSpec s = clean_spec(2, "scp");
+  s.test = "voltage";
+  s.length_mm = 70.0;
+  s.voltage.loads_g = {60.0};
+  s.voltage.shape = "repeated";
+  s.voltage.cycles = 3;
+  s.voltage.steps_per_half = 4;
+  const auto disp_at_zero = [&](const RigEffects& e) {
+    s.effects = e;
+    const RigRun run = run_rig(s, card());
+    const std::vector<double> v = column(run, "voltage_V"), d = column(run, "disp_mm");
+    EXPECT_EQ(v.size(), 1u + 2 * 3 * 4);
+    std::vector<double> out;
+    for (std::size_t k = 0; k < v.size(); ++k) {
+      if (k % 8 == 4) {
+        EXPECT_DOUBLE_EQ(v[k], s.voltage.v_max);
+      }
+      if (k % 8 == 0) {
+        EXPECT_DOUBLE_EQ(v[k], 0.0);
+        out.push_back(d[k]);
+      }
+    }
+    return out;
+  };
+  const std::vector<double> clean = disp_at_zero({});
+  RigEffects lonely;
+  lonely.lonely_stroke = 0.1;
+  const std::vector<double> with = disp_at_zero(lonely);
+  ASSERT_EQ(clean.size(), 4u);
+  for (std::size_t c = 1; c < clean.size(); ++c) {
+    EXPECT_NEAR(clean[c], clean[0], 1e-12);
+    EXPECT_GT(std::abs(with[c] - with[0]), 1e-3);
+    EXPECT_NEAR(with[c], with[1], 1e-12);
+  }
+  s.voltage.shape = "sawtooth";
+  EXPECT_THROW_MSG(s.validate(), InvalidArgument, "shape");
+}
+
 TEST(Rig, OffsetNonlinearityIsAKneeAtLowLoad) {
   // f1 += m R k(F) and f2 *= 1 - m k(F), k = exp(-(F - F_lo) / (0.2 dF)): at the lowest load
   // the first reading (H = 0) moves by exactly m R; far from it, the change decays as k.

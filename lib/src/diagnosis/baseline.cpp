@@ -55,6 +55,7 @@ Record make_record(const DiagnoseData& data, const DiagnoseOptions& opt) {
     throw IdentificationError(fmt::format("{} readings are too few to diagnose (need >= 40)", n));
   rec.u = data.input;
   rec.y = data.output;
+  rec.input_is_load = data.input_is_load;
   const auto [ymin, ymax] = std::minmax_element(rec.y.begin(), rec.y.end());
   rec.range = *ymax - *ymin;
   if (!(rec.range > 0.0))

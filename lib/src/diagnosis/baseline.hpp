@@ -21,7 +21,8 @@ namespace scpkit::diagnosis {
 struct Record {
   std::vector<double> time, u, y;
   bool several_loads = false;
-  std::vector<int> seg;  ///< segment of each row (0, 1, ...; one segment for load tests)
+  bool input_is_load = false;  ///< load tests: the first rise is memory-only (never scored)
+  std::vector<int> seg;        ///< segment of each row (0, 1, ...; one segment for load tests)
   std::vector<std::size_t> seg_first, seg_count;
   std::vector<double> seg_load;  ///< N (several_loads only)
   /// Held-out fold of each row; kAlwaysTrained = in every training set, never scored;

@@ -545,6 +545,16 @@ Finding detect_lonely_stroke(Context& ctx) {
       [&](int k) {
         const std::vector<char> train = ctx.train_mask(k);
         const FoldFit& base = ctx.by_fold[static_cast<std::size_t>(k)];
+        // Without a training row on a first rise the term is constant on every trained
+        // segment, where the offsets take it up: lambda is not identified and stays 0 (a grid
+        // value chosen on a tie lost 40 % on one record's held-out first rise).
+        bool identified = false;
+        for (std::size_t t = 0; t < n && !identified; ++t)
+          identified = train[t] && m[t] < seg_top[static_cast<std::size_t>(rec.seg[t])];
+        if (!identified) {
+          chosen += fmt::format("{}0 (no first rise trained)", chosen.empty() ? "" : ", ");
+          return base.pred;
+        }
         const std::vector<double> scale = scales(base);
         auto shifted = [&](const Term& c) {
           std::vector<double> y(rec.y);
@@ -617,17 +627,19 @@ Finding detect_lonely_stroke(Context& ctx) {
       "a term in the running maximum of the input since the last load change (first rise "
       "against later cycles)");
   f.extended_model += " (lambda per fold: " + chosen + ")";
-  // On one load record a first stroke that differs from later ones is also what any Preisach
-  // plane extending below the lowest tested input gives (the specimen's virgin loading before
-  // the record; PHYSICS.md section 4: the expanded plane), so the model-free offset is
-  // evidence only where it comes back after load changes (tests at several loads).
+  // On a load test a first stroke that differs from later ones is also what any Preisach
+  // plane extending below the lowest tested load gives (the specimen's virgin loading before
+  // the record; PHYSICS.md section 4: the expanded plane), so there the model-free offset is
+  // no evidence. With voltage, power or temperature as the input (at one load or several) the
+  // lowest input (0 V, ambient) resets every hysteron of a plane on the tested inputs: an
+  // offset between readings in the same memory state is the lonely stroke.
   const Signature& sig = ctx.return_point.running_max;
   if (sig.available) {
     f.evidence += "; " + describe(sig);
     // Intersection-union, as for the other signatures: the offset significant and the term
     // gaining at least min_gain_pct at gain_alpha (measured: with any gain > 0 a drift record
     // whose trend extension gained 85 % was named a lonely stroke gaining 0.1 %).
-    if (rec.several_loads && sig.p_value < ctx.opt.alpha && f.p_value < ctx.opt.gain_alpha &&
+    if (!rec.input_is_load && sig.p_value < ctx.opt.alpha && f.p_value < ctx.opt.gain_alpha &&
         f.gain_pct >= ctx.opt.min_gain_pct)
       f.detected = true;
   }

@@ -32,6 +32,8 @@ void RigSpec::validate() const {
     if (v.cycles < 1 || v.steps_per_half < 1 || v.readings_per_hold < 1)
       throw_invalid("voltage protocol counts must be positive");
     if (!(v.dwell_s > 0.0)) throw_invalid("voltage dwell_s must be > 0");
+    if (v.shape != "damped" && v.shape != "repeated")
+      throw_invalid("voltage protocol shape must be damped or repeated, got '{}'", v.shape);
     if (v.truth != "gpi" && v.truth != "preisach")
       throw_invalid("voltage truth must be gpi or preisach, got '{}'", v.truth);
     if (effects.minor_loop_noncongruence > 0.0)
@@ -98,8 +100,8 @@ RigSpec load_rig_spec(const std::filesystem::path& path) {
   s.test = r.text(root, "test", s.test);
   s.specimen = r.text(root, "specimen", s.specimen);
   if (const toml::table* v = r.table(root, "voltage")) {
-    r.only_keys(*v, {"loads_g", "v_max", "cycles", "steps_per_half", "dwell_s", "dwell_spread",
-                     "readings_per_hold", "truth"});
+    r.only_keys(*v, {"loads_g", "v_max", "shape", "cycles", "steps_per_half", "dwell_s",
+                     "dwell_spread", "readings_per_hold", "truth"});
     VoltageProtocol& q = s.voltage;
     if (const toml::node* n = v->get("loads_g")) {
       const toml::array* a = n->as_array();
@@ -112,6 +114,9 @@ RigSpec load_rig_spec(const std::filesystem::path& path) {
       }
     }
     q.v_max = r.positive(*v, "v_max", q.v_max, false);
+    q.shape = r.text(*v, "shape", q.shape);
+    if (q.shape != "damped" && q.shape != "repeated")
+      r.fail(v->get("shape"), fmt::format("'shape' must be damped or repeated, got '{}'", q.shape));
     q.cycles = static_cast<int>(r.integer(*v, "cycles", q.cycles, 1, 1000));
     q.steps_per_half =
         static_cast<int>(r.integer(*v, "steps_per_half", q.steps_per_half, 1, 10000));

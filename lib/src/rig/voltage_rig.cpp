@@ -33,11 +33,12 @@ std::vector<double> voltage_protocol(const VoltageProtocol& p) {
     for (int k = 1; k <= p.steps_per_half; ++k)
       v.push_back(from + (to - from) * k / p.steps_per_half);
   };
+  const bool damped = p.shape == "damped";
   for (int k = 0; k < turns; ++k) {
-    const double f = static_cast<double>(k) / turns;
+    const double f = damped ? static_cast<double>(k) / turns : 0.0;
     ramp(k % 2 == 0 ? p.v_max * (1.0 - 0.3 * f) : p.v_max * 0.3 * f);
   }
-  ramp(0.0);
+  if (v.back() != 0.0) ramp(0.0);
   return v;
 }
 

@@ -68,7 +68,10 @@ struct VoltageProtocol {
   /// when the order is not monotone).
   std::vector<double> loads_g = {30, 40, 50, 60, 70, 80, 90, 100};
   double v_max = 5.1;
-  int cycles = 2;          ///< damped oscillation cycles per load
+  /// damped: an oscillation narrowing towards mid-range (paper 000), back to 0 V at the end;
+  /// repeated: full cycles 0 -> v_max -> 0 V (paper 001's training cycles at one load).
+  std::string shape = "damped";
+  int cycles = 2;          ///< cycles per load
   int steps_per_half = 9;  ///< readings per half cycle
   double dwell_s = 60.0;
   double dwell_spread = 0.0;  ///< as LoadProtocol::dwell_spread
