@@ -187,7 +187,8 @@ int run_diagnose(const std::vector<std::string>& args) {
                   {"heldout_by", d.heldout_by},
                   {"heldout_rows", d.heldout_rows},
                   {"rms_pct_range", d.rms_pct_range},
-                  {"max_pct_range", d.max_pct_range}}},
+                  {"max_pct_range", d.max_pct_range},
+                  {"sustained_rms_pct_range", d.sustained_rms_pct_range}}},
                 {"noise_floor_pct_range", d.noise_floor_pct_range},
                 {"findings", findings},
                 {"cause", d.cause}});
@@ -197,9 +198,9 @@ int run_diagnose(const std::vector<std::string>& args) {
                            out.column);
   std::cout << fmt::format(
       "  baseline {}, held out by {} ({} readings scored): E_RMS {:.3f} %, E_max {:.3f} % of "
-      "range; noise floor {:.3f} %\n",
+      "range (E_RMS without the largest 5 %: {:.3f} %); noise floor {:.3f} %\n",
       d.baseline_model, d.heldout_by, d.heldout_rows, d.rms_pct_range, d.max_pct_range,
-      d.noise_floor_pct_range);
+      d.sustained_rms_pct_range, d.noise_floor_pct_range);
   for (const Finding& f : d.findings) {
     if (!f.tested) {
       std::cout << fmt::format("  {:<24} not tested: {}\n", f.effect, f.evidence);

@@ -40,7 +40,7 @@ void expect_named(const std::string& side, const std::string& effect,
       }
       // A detected effect's extension gains on held-out data (but for a lonely stroke on one
       // record, named by its return-point offset: its gain cannot be measured there).
-      if (f.detected && f.evidence.find("named by this offset alone") == std::string::npos) {
+      if (f.detected && f.evidence.find("named by this signature alone") == std::string::npos) {
         EXPECT_LT(f.heldout_rms_after, f.heldout_rms_before) << f.effect;
       }
     }
@@ -105,6 +105,23 @@ TEST(Diagnose, CreepSeenDuringHoldsOnVoltageTests) {
 TEST(Diagnose, CreepSlowerThanTheHolds) {
   expect_named("load", "creep", {2, 5},
                [](RigSpec& r) { r.effects.creep_tau_s = 5.0 * r.protocol.dwell_s; });
+}
+
+// One reading per hold, holds of different lengths: a creep fraction of 0.1 at 0.01 and 0.02 mm
+// noise (indices 0 and 3) leaves the baseline at the noise floor, where neither the Kelvin
+// nor the Prony extension gains; its residuals follow the hold times (the permutation test of
+// dwell_signature) and name it. Clean records with holds of different lengths, on both
+// sides, are `none`: their residuals cannot follow the hold times.
+TEST(Diagnose, CreepFollowingTheHoldTimesIsNamedWithOneReadingPerHold) {
+  expect_named("load", "creep", {0, 3}, [](RigSpec& r) { r.protocol.dwell_spread = 0.5; });
+  expect_named("load", "none", {0, 1, 2}, [](RigSpec& r) {
+    r.protocol.dwell_spread = 1.0;
+    r.protocol.readings_per_hold = 1;
+  });
+  expect_named("voltage", "none", {0, 1}, [](RigSpec& r) {
+    r.voltage.dwell_spread = 1.0;
+    r.voltage.readings_per_hold = 1;
+  });
 }
 
 // Voltage tests: a drift with the loads tested in increasing order (the offset map cannot

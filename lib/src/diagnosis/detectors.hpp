@@ -26,6 +26,7 @@ struct Context {
   double rms_before = 0.0;                       ///< % of range
   ReturnPointSignatures return_point;            ///< model-free (signatures.hpp)
   Signature congruency, holds;
+  Signature dwell;  ///< creep with one reading per hold: residuals against the hold times
   std::mt19937_64 rng;
 
   Context(const Record& r, const Baseline& b, const DiagnoseOptions& o);

@@ -34,6 +34,18 @@ const std::vector<std::string>& effect_names() {
 
 namespace {
 constexpr double kMaterialPct = 1.0;  ///< % of range: the least residual error called structure
+
+/// Held-out E_RMS (% of range) without the largest 5 % of the residuals.
+double sustained_rms_pct(const diagnosis::Context& ctx) {
+  std::vector<double> a;
+  for (std::size_t t : ctx.scored) a.push_back(std::abs(ctx.r[t]));
+  std::sort(a.begin(), a.end());
+  const std::size_t keep = a.size() - a.size() / 20;
+  double ss = 0.0;
+  for (std::size_t i = 0; i < keep; ++i) ss += a[i] * a[i];
+  return 100.0 * std::sqrt(ss / static_cast<double>(std::max<std::size_t>(keep, 1))) /
+         ctx.rec.range;
+}
 }  // namespace
 
 Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
@@ -51,6 +63,7 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   for (std::size_t t : ctx.scored) rmax = std::max(rmax, std::abs(ctx.r[t]));
   d.max_pct_range = 100.0 * rmax / rec.range;
   d.noise_floor_pct_range = 100.0 * ctx.floor / rec.range;
+  d.sustained_rms_pct_range = sustained_rms_pct(ctx);
 
   d.findings.push_back(detect_lonely_stroke(ctx));
   d.findings.push_back(detect_creep(ctx));
@@ -76,7 +89,10 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   // readings moving during holds (creep) and history-dependent loop shapes explain return-point
   // offsets too, so they come before the lonely stroke.
   const Finding* creep = detected("creep");
-  const bool creep_seen_in_holds = creep && ctx.holds.available;
+  // Creep is seen without a model when readings move during holds, or when the residuals
+  // follow the hold times (dwell_signature).
+  const bool creep_seen_in_holds =
+      creep && (ctx.holds.available || (ctx.dwell.available && ctx.dwell.p_value < opt.alpha));
   for (const char* e : {"outliers", "creep", "minor_loop_noncongruence"}) {
     const Finding* f = detected(e);
     if (f == creep && !creep_seen_in_holds) continue;
@@ -105,8 +121,13 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   }
   // Residual structure is material when the held-out error exceeds twice the noise floor
   // and 1 % of the range: below that a rate-independent baseline of this size misses clean,
-  // noise-free rig data by as much (0.4-0.55 % held-out E_RMS, docs/diagnose.md).
-  const bool material = d.rms_pct_range > std::max(2.0 * d.noise_floor_pct_range, kMaterialPct);
+  // noise-free rig data by as much (0.4-0.55 % held-out E_RMS, docs/diagnose.md). Structure
+  // is sustained: the error is taken without its largest 5 % (measured: on clean records of
+  // an independent generator with two rises to the top load, one held-out reading on the
+  // rising branch the training folds never visited was 8.7 % of the range off and carried
+  // the E_RMS from 0.4 to 1.1 %: `unexplained` on clean data).
+  const bool material =
+      d.sustained_rms_pct_range > std::max(2.0 * d.noise_floor_pct_range, kMaterialPct);
   d.cause = material ? "unexplained" : "none";
   // One record driven by voltage, power or temperature (one load): its first rise is the only
   // one, so the running-maximum term's coefficient has no training rows when the first rise's
@@ -118,17 +139,28 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   // alpha / 10 when they are not (measured on 24 clean rig records of one load: one offset at
   // p = 0.0046 below the materiality threshold; lonely strokes of 3 % at p < 1e-4). Not on load
   // tests: there a plane below the lowest load is the specimen's virgin loading (docs/rig.md).
-  const auto& rp = ctx.return_point.running_max;
+  // Creep with one reading per hold whose residuals follow the hold times (dwell_signature:
+  // a permutation test, exact when the holds' lengths do not depend on the memory path) but
+  // below what its extension can gain against the noise: named by the signature too.
   const double level = material ? opt.alpha : opt.alpha / 10.0;
-  if (!rec.several_loads && !rec.input_is_load && rp.available && rp.p_value < level) {
+  auto name_by_signature = [&](const std::string& effect, const std::string& why) {
     for (Finding& f : d.findings) {
-      if (f.effect != "lonely_stroke" || !f.tested) continue;
+      if (f.effect != effect || !f.tested) continue;
       f.detected = true;
-      f.evidence +=
-          "; named by this offset alone: on one record the first rise lies in one held-out "
-          "fold, so the term's gain on held-out data is not a fair test";
+      f.evidence += "; named by this signature alone: " + why;
       d.cause = f.effect;
     }
+  };
+  const auto& rp = ctx.return_point.running_max;
+  const bool lonely_offset =
+      !rec.several_loads && !rec.input_is_load && rp.available && rp.p_value < level;
+  const bool creep_dwell = ctx.dwell.available && ctx.dwell.p_value < level;
+  if (creep_dwell && !(lonely_offset && rp.p_value < ctx.dwell.p_value)) {
+    name_by_signature("creep", "its extension gains too little against the noise to show");
+  } else if (lonely_offset) {
+    name_by_signature("lonely_stroke",
+                      "on one record the first rise lies in one held-out fold, so the term's "
+                      "gain on held-out data is not a fair test");
   }
   return d;
 }

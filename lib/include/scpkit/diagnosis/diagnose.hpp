@@ -52,6 +52,8 @@ struct Diagnosis {
   std::size_t heldout_rows = 0;  ///< readings scored out of fold
   double rms_pct_range = 0.0;    ///< baseline, held-out
   double max_pct_range = 0.0;
+  /// held-out E_RMS without its largest 5 % of residuals: what `none` is judged on
+  double sustained_rms_pct_range = 0.0;
   double noise_floor_pct_range = 0.0;
   std::vector<Finding> findings;
   std::string cause = "none";
