@@ -51,8 +51,8 @@ Record make_record(const DiagnoseData& data, const DiagnoseOptions& opt) {
       (!data.load_N.empty() && data.load_N.size() != n)) {
     throw_invalid("diagnose: the columns have different lengths");
   }
-  if (n < 40)
-    throw IdentificationError(fmt::format("{} readings are too few to diagnose (need >= 40)", n));
+  if (n < 30)
+    throw IdentificationError(fmt::format("{} readings are too few to diagnose (need >= 30)", n));
   rec.u = data.input;
   rec.y = data.output;
   rec.input_is_load = data.input_is_load;
