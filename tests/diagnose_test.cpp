@@ -196,10 +196,10 @@ TEST(Diagnose, LonelyStrokeOfOneSignAfterEveryLoadChange) {
                [](RigSpec& r) { r.effects.lonely_sign_after_increase = 1.0; });
 }
 
-// Spikes of 6-12 % of the nominal range, a few times the baseline's own error: flagged at 8 robust
+// Spikes of 6-12 % of the nominal range, a few times the baseline's own error: flagged at 6 robust
 // sigmas (largest on records without spikes: 5.5) and named once the baseline identified
-// afresh without them gains on the other readings, or they stand beyond 10. At 0.03 (3-6 %)
-// they stand 5-6.7 sigmas out, as far as the largest residuals of clean records: not named.
+// afresh without them gains on the other readings (beyond 8 sigmas: anything; between 6 and
+// 8: at least 5 %, significantly), or they stand beyond 10.
 TEST(Diagnose, ModestSpikesAreNamed) {
   expect_named("load", "outliers", {1, 2}, [](RigSpec& r) { r.effects.outliers = 0.06; });
   expect_named("voltage", "outliers", {2}, [](RigSpec& r) { r.effects.outliers = 0.06; });

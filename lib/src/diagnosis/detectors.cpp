@@ -910,10 +910,13 @@ Finding detect_noncongruence(Context& ctx) {
 Finding detect_outliers(Context& ctx) {
   // A reading is flagged more than kFlag robust sigmas off its neighbours (and kFlag / 2 off
   // the residual median); a spike beyond kSure is named even when removing it gains nothing
-  // (an isolated reading barely moves a fit on hundreds). Measured largest score on records
-  // without outliers: 5.5 over 120 rig scenarios of every other effect (creep with readings
-  // during holds), 4.9 over 40 records of an independent generator; with 5-20 % spikes 6.7-72.
-  constexpr double kFlag = 8.0, kSure = 10.0;
+  // (an isolated reading barely moves a fit on hundreds), beyond kFirm when removing it gains
+  // anything, and below kFirm only when removing it gains at least min_gain_pct, significantly
+  // (at alpha). Measured largest score on records without outliers: 5.5 over 120 rig
+  // scenarios of every other effect (creep with readings during holds), 4.9 over 40 records of
+  // an independent generator; with 5-20 % spikes 6.7-72 (a 10 % spike on a damped record of
+  // 101 readings, one per hold, scored 6.9, as its neighbours' misfit is large).
+  constexpr double kFlag = 6.0, kFirm = 8.0, kSure = 10.0;
   const Record& rec = ctx.rec;
   const std::size_t n = rec.size();
   Finding f;
@@ -989,6 +992,7 @@ Finding detect_outliers(Context& ctx) {
   f.score = zmax;
   f.p_value = std::min(1.0, static_cast<double>(n) * std::erfc(zmax / std::sqrt(2.0)));
   f.heldout_rms_before = f.heldout_rms_after = ctx.rms_before;
+  double gain_p = 1.0;
   if (count > 0) {
     // The robust fit: the baseline identified afresh without the flagged readings (its size
     // and smoothness too: measured, spikes made cross-validation pick a larger L, and the
@@ -1021,17 +1025,20 @@ Finding detect_outliers(Context& ctx) {
         100.0 * std::sqrt(ss / static_cast<double>(std::max<std::size_t>(m, 1))) / rec.range;
     f.heldout_rms_after = s.rms_after;
     f.gain_pct = s.gain_pct;
+    gain_p = s.p_value;
   }
-  // Removing them must help, unless the spikes are unmistakable (> 20 robust sigmas) and
+  // Removing them must help, unless the spikes are unmistakable (> kSure robust sigmas) and
   // removing them does not hurt either (a reading whose removal worsens the held-out fit is
   // one the model needs, whatever its residual).
-  f.detected = count > 0 && f.p_value < ctx.opt.alpha &&
-               (f.gain_pct > 1.0 || (zmax > kSure && f.gain_pct > -1.0));
+  const bool gains = zmax > kSure   ? f.gain_pct > -1.0
+                     : zmax > kFirm ? f.gain_pct > 1.0
+                                    : f.gain_pct >= ctx.opt.min_gain_pct && gain_p < ctx.opt.alpha;
+  f.detected = count > 0 && f.p_value < ctx.opt.alpha && gains;
   f.evidence = fmt::format(
       "{} reading(s) stand more than {:g} robust sigmas off their neighbours (largest {:.1f}); "
       "without them the held-out E_RMS on the other readings goes from {:.3f} to {:.3f} % of "
-      "range",
-      count, kFlag, zmax, f.heldout_rms_before, f.heldout_rms_after);
+      "range (sign-flip p = {:.3f})",
+      count, kFlag, zmax, f.heldout_rms_before, f.heldout_rms_after, gain_p);
   return f;
 }
 
