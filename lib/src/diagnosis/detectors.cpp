@@ -380,6 +380,33 @@ Finding detect_drift(Context& ctx) {
 
 namespace {
 
+// Kelvin elements for creep (PHYSICS.md section 5): time constants in holds, and the lag
+// p - v of an element v relaxing towards p with time constant tau, dt[t] the time since the
+// previous reading (restarted at each segment).
+constexpr double kKelvinHolds[] = {0.3, 1.0, 3.0};
+
+void kelvin_lag(const Record& rec, const std::vector<double>& p, const std::vector<double>& dt,
+                double tau, std::vector<double>& lag) {
+  lag.resize(rec.size());
+  double v = 0.0;
+  for (std::size_t t = 0; t < rec.size(); ++t) {
+    const bool start = t == 0 || rec.seg[t] != rec.seg[t - 1];
+    v = start ? p[t] : p[t] + (v - p[t]) * std::exp(-dt[t] / tau);
+    lag[t] = p[t] - v;
+  }
+}
+
+// Time since the previous reading (0 where the clock does not advance).
+std::vector<double> reading_intervals(const Record& rec) {
+  std::vector<double> dt(rec.size(), 0.0);
+  for (std::size_t t = 1; t < rec.size(); ++t) dt[t] = std::max(rec.time[t] - rec.time[t - 1], 0.0);
+  return dt;
+}
+
+// Permutations of the hold-time test: ten times the other tests', since where it names creep
+// alone it must reach alpha / 10 (diagnose.cpp).
+int dwell_permutations(const DiagnoseOptions& opt) { return 10 * opt.permutations; }
+
 // With one reading per hold, holds of different lengths are an experiment: the response lags
 // each step by a part that decays with the time held, so the residuals of a rate-independent
 // baseline follow the hold times; without creep they cannot, whatever the baseline misfits
@@ -394,14 +421,12 @@ Signature dwell_signature(Context& ctx, double hold) {
   s.what = "residuals along the lag behind each step, in the readings' own hold times";
   std::vector<double> p(rec.y);
   for (std::size_t t : ctx.scored) p[t] = ctx.oof[t];
-  std::vector<char> scored(n, 0);
-  for (std::size_t t : ctx.scored) scored[t] = 1;
-  std::vector<std::size_t> movable;  // rows whose time since the previous reading is a hold
-  std::vector<double> dt(n, 0.0);
+  // Rows whose time since the previous reading is a hold (elsewhere the lag restarts or the
+  // interval is 0, and a permuted hold would change nothing or mean nothing).
+  const std::vector<double> dt = reading_intervals(rec);
+  std::vector<std::size_t> movable;
   for (std::size_t t = 1; t < n; ++t) {
-    if (rec.seg[t] != rec.seg[t - 1] || !(rec.time[t] > rec.time[t - 1])) continue;
-    dt[t] = rec.time[t] - rec.time[t - 1];
-    movable.push_back(t);
+    if (rec.seg[t] == rec.seg[t - 1] && dt[t] > 0.0) movable.push_back(t);
   }
   double lo = HUGE_VAL, hi = 0.0;
   for (std::size_t t : movable) {
@@ -411,18 +436,15 @@ Signature dwell_signature(Context& ctx, double hold) {
   if (movable.size() < 20 || !(hi > 1.05 * lo)) return s;  // the holds do not vary
   s.available = true;
   s.units = static_cast<int>(movable.size());
-  const double taus[] = {0.3 * hold, hold, 3.0 * hold};
+  std::vector<double> lag;
   auto statistic = [&](const std::vector<double>& d, double* estimate) {
     double best = -HUGE_VAL;
-    for (double tau : taus) {
-      double v = 0.0, rl = 0.0, ll = 0.0;
-      for (std::size_t t = 0; t < n; ++t) {
-        const bool start = t == 0 || rec.seg[t] != rec.seg[t - 1];
-        v = start ? p[t] : p[t] + (v - p[t]) * std::exp(-d[t] / tau);
-        if (!scored[t]) continue;
-        const double lag = p[t] - v;
-        rl -= ctx.r[t] * lag;
-        ll += lag * lag;
+    for (double holds : kKelvinHolds) {
+      kelvin_lag(rec, p, d, holds * hold, lag);
+      double rl = 0.0, ll = 0.0;
+      for (std::size_t t : ctx.scored) {
+        rl -= ctx.r[t] * lag[t];
+        ll += lag[t] * lag[t];
       }
       if (!(ll > 0.0)) continue;
       const double z = rl / std::sqrt(ll);
@@ -437,9 +459,8 @@ Signature dwell_signature(Context& ctx, double hold) {
   std::vector<double> shuffled(dt);
   std::vector<double> pool;
   for (std::size_t t : movable) pool.push_back(dt[t]);
-  // Ten times the other tests' permutations: where it names creep alone it must reach
-  // alpha / 10 (diagnose.cpp). Its own stream: the other tests' draws stay as they were.
-  const int permutations = 10 * ctx.opt.permutations;
+  // Its own stream: the other tests' draws stay as they were.
+  const int permutations = dwell_permutations(ctx.opt);
   int above = 0;
   std::mt19937_64 rng(ctx.opt.seed + 7);
   double sum = 0.0, sum2 = 0.0;
@@ -467,18 +488,12 @@ Finding prony_creep(Context& ctx, double hold) {
   return feature_finding(
       ctx, "creep", "baseline + Prony series (Kelvin elements, tau = 0.3, 1, 3 holds)",
       [&](const FoldFit& fit) {
-        const double taus[] = {0.3 * hold, hold, 3.0 * hold};
+        const std::vector<double> dt = reading_intervals(rec);
         Eigen::MatrixXd X(static_cast<Eigen::Index>(rec.size()), 3);
+        std::vector<double> lag;
         for (Eigen::Index k = 0; k < 3; ++k) {
-          double v = 0.0;
-          for (std::size_t t = 0; t < rec.size(); ++t) {
-            const bool start = t == 0 || rec.seg[t] != rec.seg[t - 1];
-            const double p = fit.pred[t];
-            v = start ? p
-                      : p + (v - p) *
-                                std::exp(-std::max(rec.time[t] - rec.time[t - 1], 0.0) / taus[k]);
-            X(static_cast<Eigen::Index>(t), k) = p - v;
-          }
+          kelvin_lag(rec, fit.pred, dt, kKelvinHolds[k] * hold, lag);
+          X.col(k) = Eigen::Map<const Eigen::VectorXd>(lag.data(), X.rows());
         }
         return X;
       },
@@ -561,7 +576,7 @@ Finding kelvin_creep(Context& ctx) {
         "; the {} (projection {:.3g} of the lag, p = {:.2g} against the {} hold times "
         "permuted {} times)",
         ctx.dwell.what, ctx.dwell.estimate, ctx.dwell.p_value, ctx.dwell.units,
-        10 * ctx.opt.permutations);
+        dwell_permutations(ctx.opt));
     // Intersection-union, as for the other signatures: the dependence on the hold times
     // significant, and the Kelvin element gaining at gain_alpha.
     if (ctx.dwell.p_value < ctx.opt.alpha && f.p_value < ctx.opt.gain_alpha && f.gain_pct > 0.0)

@@ -91,11 +91,11 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   const Finding* creep = detected("creep");
   // Creep is seen without a model when readings move during holds, or when the residuals
   // follow the hold times (dwell_signature).
-  const bool creep_seen_in_holds =
+  const bool creep_seen =
       creep && (ctx.holds.available || (ctx.dwell.available && ctx.dwell.p_value < opt.alpha));
   for (const char* e : {"outliers", "creep", "minor_loop_noncongruence"}) {
     const Finding* f = detected(e);
-    if (f == creep && !creep_seen_in_holds) continue;
+    if (f == creep && !creep_seen) continue;
     if (!best) best = f;
   }
   // With one reading per hold creep is known by its gain alone: a Kelvin element that starts
