@@ -8,6 +8,7 @@ packages=(
   libeigen3-dev libceres-dev libboost-program-options-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libtomlplusplus-dev nlohmann-json3-dev clang-format
+  python3
 )
 
 missing=()

@@ -20,7 +20,7 @@
 int main(int argc, char** argv) {
   using namespace scpkit;
   int cases = 12, offset = 0;
-  std::string out, only_side, only_effect;
+  std::string out, only_side, only_effect, dump;
   bool verbose = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -36,6 +36,8 @@ int main(int argc, char** argv) {
       only_effect = argv[++i];
     else if (a == "-v")
       verbose = true;
+    else if (a == "--dump" && i + 1 < argc)  // the scenarios' files only, SIDE-EFFECT-I.csv
+      dump = argv[++i];
     else if (a == "--show" && i + 3 < argc) {
       // One scenario in detail: --show SIDE EFFECT INDEX [--csv FILE].
       const testing::Scenario s =
@@ -52,7 +54,7 @@ int main(int argc, char** argv) {
     } else {
       std::cerr << "usage: diagnose_confusion [--cases N] [--offset K] [--side load|voltage] "
                    "[--effect NAME] "
-                   "[--out FILE.md] [-v]\n";
+                   "[--out FILE.md] [--dump DIR] [-v]\n";
       return 2;
     }
   }
@@ -74,6 +76,15 @@ int main(int argc, char** argv) {
     cols.push_back("unexplained");
     for (const std::string& e : effect_names()) {
       if (std::find(cols.begin(), cols.end(), e) == cols.end()) cols.push_back(e);
+    }
+    if (!dump.empty()) {
+      for (const std::string& e : effects) {
+        if (!only_effect.empty() && e != only_effect) continue;
+        for (int k = offset; k < offset + cases; ++k)
+          std::ofstream(fmt::format("{}/{}-{}-{}.csv", dump, side, e, k))
+              << testing::scenario_csv(testing::make_scenario(side, e, k));
+      }
+      continue;
     }
     std::map<std::string, std::map<std::string, int>> table;
     // Every scenario of this side, diagnosed on all cores (each diagnosis is independent).

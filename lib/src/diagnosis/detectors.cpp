@@ -536,6 +536,7 @@ Finding kelvin_creep(Context& ctx) {
     };
   };
   std::string chosen;
+  int creeping_folds = 0;  // folds whose training rows chose a creep fraction c > 0
   Finding f = model_finding(
       ctx, "creep", "baseline through a Kelvin element (creep fraction c, time constant tau)",
       [&](int k) {
@@ -554,6 +555,7 @@ Finding kelvin_creep(Context& ctx) {
             best_k = kv;
           }
         }
+        if (best_k.c > 0.0) ++creeping_folds;
         best_p = best_k.c > 0.0 ? ctx.base.fit(train, {filter_for(best_k), nullptr, false}).pred
                                 : ctx.by_fold[static_cast<std::size_t>(k)].pred;
         chosen +=
@@ -562,6 +564,17 @@ Finding kelvin_creep(Context& ctx) {
       },
       "the response lags its rate-independent value with the readings' own timing");
   f.extended_model += " (per fold: " + chosen + ")";
+  // Known by its gain, creep must also be what most folds' training rows chose: a gain carried
+  // by a minority of folds is a misfit some folds happen to absorb with a lag (measured: a
+  // clean damped record of an independent generator, 59 readings scored, c > 0 in 2 of 6
+  // folds, gain 8.6 % at p = 0.006, named `creep`). On the rig's 48 creep records (24 per
+  // side) every fold chose c > 0 wherever the Kelvin element was detected; on its clean
+  // records folds choose c > 0 now and then (up to 6 of 7), so this is a guard, not evidence.
+  if (f.detected && 2 * creeping_folds <= rec.folds) {
+    f.detected = false;
+    f.evidence += fmt::format("; only {} of {} folds chose a creep fraction above 0",
+                              creeping_folds, rec.folds);
+  }
   ctx.dwell = dwell_signature(ctx, step);
   // Where the residuals follow the hold times, the lag itself as a feature too (the Prony
   // series on the baseline's prediction, as with readings during holds): the Kelvin grid's
