@@ -150,7 +150,7 @@ TEST(Diagnose, NoncongruenceFoundWhereTheSensorResolvesIt) {
 
 // With the rig's 0.04 mm sensor the output-map extension does not gain on these two
 // scenarios (-2.7 and +0.4 %), but the congruency test, F-calibrated, is far beyond what
-// clean records give (p = 4e-5 and 4e-4; the smallest on 40 clean load records 0.0073):
+// clean records give (p = 4e-5 and 4e-4; the smallest on 15 clean load records 0.0073):
 // named by the signature alone.
 TEST(Diagnose, NoncongruenceNamedByItsSignatureAlone) {
   expect_named("load", "minor_loop_noncongruence", {7, 20}, {}, [](const Diagnosis& d) {

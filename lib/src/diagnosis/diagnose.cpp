@@ -163,7 +163,7 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   // the vocabulary models them well enough to gain on held-out cycles: measured on an
   // independent generator's moving Preisach records, p = 4e-4 with the output map losing
   // 0.3 % (a moving Preisach extension, tried, lost or gained without significance too). The
-  // smallest p on 40 clean load records (rig and independent generator) was 0.0073.
+  // smallest p on the 15 clean load records tested (rig and independent generator) was 0.0073.
   // Not where readings move during holds: creep breaks congruency too.
   const bool holds_move = ctx.holds.available && ctx.holds.p_value < opt.alpha;
   const bool noncongruent =
