@@ -110,7 +110,7 @@ std::string scenario_csv(const Scenario& s) {
   return run_rig(s.spec, card).to_csv();
 }
 
-Diagnosis diagnose_scenario(const Scenario& s, const DiagnoseOptions& options) {
+DiagnoseData scenario_data(const Scenario& s) {
   const Measurement m = Measurement::parse(scenario_csv(s), "rig.csv");
   DiagnoseData data;
   data.time_s = m.find(Quantity::kTime)->values;
@@ -124,6 +124,11 @@ Diagnosis diagnose_scenario(const Scenario& s, const DiagnoseOptions& options) {
   } else {
     data.input = select_input(m).values;
   }
+  return data;
+}
+
+Diagnosis diagnose_scenario(const Scenario& s, const DiagnoseOptions& options) {
+  const DiagnoseData data = scenario_data(s);
   DiagnoseOptions o = options;
   o.seed = s.spec.seed;
   return diagnose(data, o);

@@ -37,6 +37,9 @@ Scenario make_scenario(const std::string& side, const std::string& effect, int i
 /// The rig's measurement file (SPEC format) for a scenario.
 std::string scenario_csv(const Scenario& s);
 
+/// The rig's file, written and re-read, as `scpkit diagnose` hands it to diagnose().
+DiagnoseData scenario_data(const Scenario& s);
+
 /// Runs the rig, writes and re-reads the SPEC file, and diagnoses it as `scpkit diagnose` does.
 Diagnosis diagnose_scenario(const Scenario& s, const DiagnoseOptions& options = {});
 

@@ -8,7 +8,11 @@
 #   a 5 % spike scoring 6.9 robust sigmas whose removal gains 10 % at p = 0.010 (`outliers`;
 #   was `unexplained` while that tier tested the gain at alpha), and a 12 % drift with the
 #   loads in increasing order whose running-maximum term out-gains the trend while only the
-#   drift's return-point signature is significant (`drift`; was `lonely_stroke`).
+#   drift's return-point signature is significant (`drift`; was `lonely_stroke`);
+# - two records of seeds 700-703 named `none` before spikes were confirmed at their protocol
+#   points: a 10 % spike on a damped load record, one reading per hold, 4.6 robust sigmas off
+#   its neighbours and 8.0 off the readings in its memory state; a 10 % spike at a turning
+#   value of a voltage test, 16 off the same point in the other loads' segments.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -17,6 +21,7 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 python3 "$src/scripts/independent_cases.py" "$work/clean" 4 200 || exit 1
 python3 "$src/scripts/independent_cases.py" "$work/fresh" 4 600 || exit 1
+python3 "$src/scripts/independent_cases.py" "$work/fresh" 4 700 || exit 1
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -33,5 +38,7 @@ expect() {  # expect FILE CAUSE
 for f in "$work"/clean/*-none-*.csv; do expect "$f" none; done
 expect "$work/fresh/load-outliers-603.csv" outliers
 expect "$work/fresh/voltage-drift-602.csv" drift
+expect "$work/fresh/load-outliers-703.csv" outliers
+expect "$work/fresh/voltage-outliers-700.csv" outliers
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]

@@ -15,39 +15,6 @@
 namespace scpkit::diagnosis {
 namespace {
 
-struct Score {
-  double rms_after = 0.0;  // % of range
-  double gain_pct = 0.0;
-  double p_value = 1.0;
-};
-
-// Held-out comparison of an extension's out-of-fold prediction with the baseline's, on the
-// scored rows that `use` admits (all when empty).
-Score score(Context& ctx, const std::vector<double>& after, const std::vector<char>& use = {}) {
-  Score s;
-  double ss_before = 0.0, ss_after = 0.0;
-  std::size_t count = 0;
-  std::vector<double> gains;
-  for (const auto& block : ctx.blocks) {
-    double g = 0.0;
-    for (std::size_t t : block) {
-      if (!use.empty() && !use[t]) continue;
-      const double e = ctx.rec.y[t] - after[t];
-      ss_before += ctx.r[t] * ctx.r[t];
-      ss_after += e * e;
-      g += ctx.r[t] * ctx.r[t] - e * e;
-      ++count;
-    }
-    gains.push_back(g);
-  }
-  if (count == 0) return s;
-  const double before = std::sqrt(ss_before / static_cast<double>(count));
-  s.rms_after = 100.0 * std::sqrt(ss_after / static_cast<double>(count)) / ctx.rec.range;
-  s.gain_pct = before > 0.0 ? 100.0 * (1.0 - std::sqrt(ss_after / ss_before)) : 0.0;
-  s.p_value = sign_flip_p(gains, ctx.opt.permutations, ctx.rng);
-  return s;
-}
-
 // Squared error of a prediction on the training rows (how extensions choose their parameters).
 double training_sse(const std::vector<double>& y, const std::vector<double>& p,
                     const std::vector<char>& train) {
@@ -96,6 +63,31 @@ std::string describe(const Signature& s) {
 }
 
 }  // namespace
+
+Score score(Context& ctx, const std::vector<double>& after, const std::vector<char>& use) {
+  Score s;
+  double ss_before = 0.0, ss_after = 0.0;
+  std::size_t count = 0;
+  std::vector<double> gains;
+  for (const auto& block : ctx.blocks) {
+    double g = 0.0;
+    for (std::size_t t : block) {
+      if (!use.empty() && !use[t]) continue;
+      const double e = ctx.rec.y[t] - after[t];
+      ss_before += ctx.r[t] * ctx.r[t];
+      ss_after += e * e;
+      g += ctx.r[t] * ctx.r[t] - e * e;
+      ++count;
+    }
+    gains.push_back(g);
+  }
+  if (count == 0) return s;
+  const double before = std::sqrt(ss_before / static_cast<double>(count));
+  s.rms_after = 100.0 * std::sqrt(ss_after / static_cast<double>(count)) / ctx.rec.range;
+  s.gain_pct = before > 0.0 ? 100.0 * (1.0 - std::sqrt(ss_after / ss_before)) : 0.0;
+  s.p_value = sign_flip_p(gains, ctx.opt.permutations, ctx.rng);
+  return s;
+}
 
 Context::Context(const Record& record, const Baseline& b, const DiagnoseOptions& o)
     : rec(record), base(b), opt(o), rng(o.seed) {
@@ -932,146 +924,6 @@ Finding detect_noncongruence(Context& ctx) {
   const bool gains = f.gain_pct >= ctx.opt.min_gain_pct;
   f.detected = gains && (gain_p < ctx.opt.alpha ||
                          (sig.p_value < ctx.opt.alpha && gain_p < ctx.opt.gain_alpha));
-  return f;
-}
-
-Finding detect_outliers(Context& ctx) {
-  // A reading is flagged more than kFlag robust sigmas off its neighbours (and kFlag / 2 off
-  // the residual median); a spike beyond kSure is named even when removing it gains nothing
-  // (an isolated reading barely moves a fit on hundreds), beyond kFirm when removing it gains
-  // anything, and below kFirm only when removing it gains at least min_gain_pct, significantly
-  // (at gain_alpha). Measured largest score on records without outliers: 5.5 over 120 rig
-  // scenarios of every other effect (creep with readings during holds), 4.9 over 40 records of
-  // an independent generator; with 5-20 % spikes 6.7-72 (a 10 % spike on a damped record of
-  // 101 readings, one per hold, scored 6.9, as its neighbours' misfit is large).
-  constexpr double kFlag = 6.0, kFirm = 8.0, kSure = 10.0;
-  const Record& rec = ctx.rec;
-  const std::size_t n = rec.size();
-  Finding f;
-  f.effect = "outliers";
-  f.tested = true;
-  f.extended_model = "baseline refitted without the flagged readings (robust fit)";
-  // Isolated spikes: a reading far from its neighbours' mean, measured against the robust scale
-  // of that same quantity (structured residuals, smooth in time, do not produce them).
-  // Rows never held out (the segments at the extreme loads) are screened on their in-sample
-  // residuals: a spike there corrupts every fold's fit without ever being scored.
-  std::vector<double> res(n, 0.0);
-  std::vector<std::size_t> screened;
-  for (std::size_t t = 0; t < n; ++t) {
-    if (rec.fold[t] == Record::kMemoryOnly) continue;
-    res[t] =
-        rec.fold[t] == Record::kAlwaysTrained ? rec.y[t] - ctx.by_fold.front().pred[t] : ctx.r[t];
-    screened.push_back(t);
-  }
-  std::vector<double> spike, level;
-  for (std::size_t t : screened) {
-    const double left = t > 0 ? res[t - 1] : res[t + 1];
-    const double right = t + 1 < n ? res[t + 1] : res[t - 1];
-    spike.push_back(res[t] - 0.5 * (left + right));
-    level.push_back(res[t]);
-  }
-  // The scales are not taken below 0.2 % of the range: on nearly noise-free data the
-  // baseline's own kinks would otherwise stand many "sigmas" out (a spike must be at least
-  // 2.4 % of the range to be flagged).
-  const double least = 2e-3 * rec.range;
-  const double med = median(spike), scale = std::max({mad(spike), ctx.floor, least});
-  const double r_med = median(level), r_scale = std::max({mad(level), ctx.floor, least});
-  std::vector<char> flagged(n, 0);
-  int count = 0;
-  // The nearest different input before and after each reading (readings during a hold share
-  // their input): a reading at a turning value has both on the same side.
-  const double none = std::numeric_limits<double>::quiet_NaN();
-  std::vector<double> prev_u(n, none), next_u(n, none);
-  for (std::size_t t = 1; t < n; ++t)
-    prev_u[t] = rec.u[t - 1] != rec.u[t] ? rec.u[t - 1] : prev_u[t - 1];
-  for (std::size_t t = n - 1; t-- > 0;)
-    next_u[t] = rec.u[t + 1] != rec.u[t] ? rec.u[t + 1] : next_u[t + 1];
-  // On load tests, readings with the input at its running maximum and their neighbours are left
-  // out too: the first rise is memory-only (never screened), and this keeps its end, where the
-  // fitted rows begin next to unfitted ones, from reading as a spike. (Tests at several loads
-  // restart the baseline's memory with each segment, as the specimen's.)
-  std::vector<char> virgin(n, 0);
-  for (std::size_t t = 0, M = 0; t < n && !rec.several_loads; ++t) {
-    if (t == 0 || rec.seg[t] != rec.seg[t - 1]) M = t;
-    if (rec.u[t] >= rec.u[M]) {
-      M = t;
-      virgin[t] = 1;
-    }
-  }
-  double zmax = 0.0;
-  for (std::size_t i = 0; i < screened.size(); ++i) {
-    const std::size_t t = screened[i];
-    if (virgin[t] || (t > 0 && virgin[t - 1]) || (t + 1 < n && virgin[t + 1])) continue;
-    // At input reversals the model's error may legitimately kink: a spike there must stand
-    // twice as far out. Segment edges are left out (their neighbours belong to another load).
-    const bool reversal = !((prev_u[t] - rec.u[t]) * (next_u[t] - rec.u[t]) < 0.0);
-    const bool seg_edge =
-        (t > 0 && rec.seg[t] != rec.seg[t - 1]) || (t + 1 < n && rec.seg[t] != rec.seg[t + 1]);
-    if (seg_edge) continue;
-    const double strict = reversal ? 2.0 : 1.0;
-    const double z = std::abs(spike[i] - med) / scale / strict;
-    const double lv = std::abs(level[i] - r_med) / r_scale / strict;
-    zmax = std::max(zmax, std::min(z, 1.6 * lv));
-    if (z > kFlag && lv > kFlag / 2.0) {
-      flagged[t] = 1;
-      ++count;
-    }
-  }
-  f.score = zmax;
-  f.p_value = std::min(1.0, static_cast<double>(n) * std::erfc(zmax / std::sqrt(2.0)));
-  f.heldout_rms_before = f.heldout_rms_after = ctx.rms_before;
-  double gain_p = 1.0;
-  if (count > 0) {
-    // The robust fit: the baseline identified afresh without the flagged readings (its size
-    // and smoothness too: measured, spikes made cross-validation pick a larger L, and the
-    // refit with that L lost 7 % on the other readings).
-    Record robust = rec;
-    for (std::size_t t = 0; t < n; ++t) {
-      if (flagged[t]) robust.fold[t] = Record::kMemoryOnly;
-    }
-    const Baseline base(robust, ctx.opt.baseline);
-    std::vector<double> after(ctx.oof);
-    for (int k = 0; k < rec.folds; ++k) {
-      std::vector<char> train(n);
-      for (std::size_t t = 0; t < n; ++t) train[t] = robust.trains(t, k) ? 1 : 0;
-      const FoldFit fit = base.fit(train);
-      for (std::size_t t = 0; t < n; ++t) {
-        if (rec.fold[t] == k) after[t] = fit.pred[t];
-      }
-    }
-    std::vector<char> inliers(n);
-    for (std::size_t t = 0; t < n; ++t) inliers[t] = !flagged[t];
-    const Score s = score(ctx, after, inliers);
-    double ss = 0.0;
-    std::size_t m = 0;
-    for (std::size_t t : ctx.scored) {
-      if (flagged[t]) continue;
-      ss += ctx.r[t] * ctx.r[t];
-      ++m;
-    }
-    f.heldout_rms_before =
-        100.0 * std::sqrt(ss / static_cast<double>(std::max<std::size_t>(m, 1))) / rec.range;
-    f.heldout_rms_after = s.rms_after;
-    f.gain_pct = s.gain_pct;
-    gain_p = s.p_value;
-  }
-  // Removing them must help, unless the spikes are unmistakable (> kSure robust sigmas) and
-  // removing them does not hurt either (a reading whose removal worsens the held-out fit is
-  // one the model needs, whatever its residual).
-  // Below kFirm the score is a signature at a level no record without spikes reached (5.5,
-  // above), so, as for the other signatures, the gain's test is at gain_alpha (intersection-
-  // union; measured: a 5 % spike on an independent generator's damped record scored 6.9 and
-  // removing it gained 10 % at p = 0.010, which alpha missed by one resample).
-  const bool gains = zmax > kSure ? f.gain_pct > -1.0
-                     : zmax > kFirm
-                         ? f.gain_pct > 1.0
-                         : f.gain_pct >= ctx.opt.min_gain_pct && gain_p < ctx.opt.gain_alpha;
-  f.detected = count > 0 && f.p_value < ctx.opt.alpha && gains;
-  f.evidence = fmt::format(
-      "{} reading(s) stand more than {:g} robust sigmas off their neighbours (largest {:.1f}); "
-      "without them the held-out E_RMS on the other readings goes from {:.3f} to {:.3f} % of "
-      "range (sign-flip p = {:.3f})",
-      count, kFlag, zmax, f.heldout_rms_before, f.heldout_rms_after, gain_p);
   return f;
 }
 

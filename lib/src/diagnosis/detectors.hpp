@@ -33,6 +33,16 @@ struct Context {
   std::vector<char> train_mask(int fold) const;
 };
 
+/// Held-out comparison of an extension's out-of-fold prediction with the baseline's, on the
+/// scored rows that `use` admits (all when empty): E_RMS after (% of range), the gain, and the
+/// sign-flip p-value of the per-block gains.
+struct Score {
+  double rms_after = 0.0;
+  double gain_pct = 0.0;
+  double p_value = 1.0;
+};
+Score score(Context& ctx, const std::vector<double>& after, const std::vector<char>& use = {});
+
 /// Features of an effect, one row per reading, computed from one fold's baseline fit.
 using Features = std::function<Eigen::MatrixXd(const FoldFit&)>;
 

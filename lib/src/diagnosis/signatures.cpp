@@ -41,6 +41,28 @@ struct Walk {
   double lo = 0.0, span = 1.0, duration = 1.0;
 };
 
+}  // namespace
+
+std::vector<std::vector<long>> memory_states(const Record& rec) {
+  const auto [umin, umax] = std::minmax_element(rec.u.begin(), rec.u.end());
+  const double lo = *umin, span = std::max(*umax - *umin, 1e-300), tol = 1e-9 * span;
+  const PreisachGrid grid{lo, lo + span, 1};
+  PreisachState state = PreisachState::negative_saturation(grid);
+  std::vector<std::vector<long>> keys(rec.size());
+  for (std::size_t t = 0; t < rec.size(); ++t) {
+    if (t == 0 || rec.seg[t] != rec.seg[t - 1]) state = PreisachState::negative_saturation(grid);
+    state.apply(rec.u[t]);
+    if (std::abs(rec.u[t] - lo) <= tol) {
+      keys[t] = {0};  // back at the lowest input: every hysteron off, whatever came before
+    } else {
+      for (double p : state.turning_points()) keys[t].push_back(std::lround((p - lo) / span * 1e7));
+    }
+  }
+  return keys;
+}
+
+namespace {
+
 Walk walk(const Record& rec) {
   Walk w;
   const auto [umin, umax] = std::minmax_element(rec.u.begin(), rec.u.end());
@@ -48,6 +70,7 @@ Walk walk(const Record& rec) {
   w.span = std::max(*umax - *umin, 1e-300);
   w.duration = std::max(rec.time.back() - rec.time.front(), 1e-300);
   const double tol = 1e-9 * w.span;
+  const std::vector<std::vector<long>> states = memory_states(rec);
   const PreisachGrid grid{*umin, *umin + w.span, 1};
   PreisachState state = PreisachState::negative_saturation(grid);
   double M = 0.0;
@@ -63,12 +86,8 @@ Walk walk(const Record& rec) {
                          std::abs(rec.u[t + 1] - rec.u[t]) <= tol;
     if (held_on) continue;
     std::vector<long> k{rec.seg[t]};
+    k.insert(k.end(), states[t].begin(), states[t].end());
     const auto tp = state.turning_points();
-    if (std::abs(rec.u[t] - w.lo) <= tol) {
-      k.push_back(0);  // back at the lowest input: every hysteron off, whatever came before
-    } else {
-      for (double p : tp) k.push_back(std::lround((p - w.lo) / w.span * 1e7));
-    }
     w.idx.push_back(t);
     w.previous.push_back(tp.size() >= 2 ? tp[tp.size() - 2] : w.lo);
     w.key.push_back(std::move(k));

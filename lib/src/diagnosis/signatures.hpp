@@ -34,6 +34,12 @@ struct ReturnPointSignatures {
   Signature time;         ///< d ~ (time between the readings): drift
 };
 
+/// The operator's memory state after each reading: its dominant turning points (the current
+/// input last), rounded to 1e-7 of the input range, or {0} back at the lowest input (every
+/// hysteron off, whatever came before); the operator restarts with each segment. Readings
+/// with equal keys are in the same memory state.
+std::vector<std::vector<long>> memory_states(const Record& rec);
+
 /// `sigma`: the noise of one reading (the diagnosis' floor).
 ReturnPointSignatures return_point_signatures(const Record& rec, double sigma);
 Signature congruency_signature(const Record& rec);

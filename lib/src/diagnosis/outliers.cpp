@@ -1,0 +1,240 @@
+// The outliers detector: isolated spikes in the held-out residuals, confirmed by their own
+// size, by what removing them gains, or by the readings taken at the same point of the
+// protocol (a spike is not reproduced there; a model's misfit is).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+
+#include "detectors.hpp"
+#include "signatures.hpp"
+#include "stats.hpp"
+
+namespace scpkit::diagnosis {
+namespace {
+
+/// The readings taken at the same point of the protocol: in the same memory state of the
+/// operator (signatures.hpp; across the segments of a test at several loads too) and at the
+/// same place in their hold. A rate-independent model predicts them alike, so they share its
+/// misfit; a spike is not repeated among them.
+class ProtocolPoints {
+ public:
+  ProtocolPoints(const Record& rec, const std::vector<std::size_t>& rows) : key_(rec.size()) {
+    const std::vector<std::vector<long>> states = memory_states(rec);
+    long in_hold = 0;
+    for (std::size_t t = 0; t < rec.size(); ++t) {
+      const bool held = t > 0 && rec.u[t] == rec.u[t - 1] && rec.seg[t] == rec.seg[t - 1];
+      in_hold = held ? in_hold + 1 : 0;
+      key_[t] = states[t];
+      key_[t].push_back(in_hold);
+    }
+    for (std::size_t t : rows) points_[key_[t]].push_back(t);
+  }
+  /// r[t] minus the median of r at the same point elsewhere; NaN with fewer than two others.
+  double deviation(const std::vector<double>& r, std::size_t t) const {
+    std::vector<double> others;
+    for (std::size_t s : points_.at(key_[t])) {
+      if (s != t) others.push_back(r[s]);
+    }
+    if (others.size() < 2) return std::numeric_limits<double>::quiet_NaN();
+    return r[t] - median(others);
+  }
+
+ private:
+  std::vector<std::vector<long>> key_;
+  std::map<std::vector<long>, std::vector<std::size_t>> points_;
+};
+
+}  // namespace
+
+Finding detect_outliers(Context& ctx) {
+  // A reading is flagged more than kFlag robust sigmas off its neighbours (and kFlag / 2 off
+  // the residual median); a spike beyond kSure is named even when removing it gains nothing
+  // (an isolated reading barely moves a fit on hundreds), beyond kFirm when removing it gains
+  // anything, and below kFirm when removing it gains at least min_gain_pct, significantly (at
+  // gain_alpha). Measured largest score on records without outliers: 5.5 over 120 rig
+  // scenarios of every other effect (creep with readings during holds), 4.9 over 40 records of
+  // an independent generator; with 5-20 % spikes 6.7-72 (a 10 % spike on a damped record of
+  // 101 readings, one per hold, scored 6.9, as its neighbours' misfit is large).
+  //
+  // A spike is also confirmed where the protocol repeats: a reading more than kCandidate off
+  // its neighbours (and kFlag / 2 off the median) that stands more than kRepro robust sigmas
+  // off the readings at the same protocol point elsewhere (ProtocolPoints) is named unless
+  // removing it hurts. A model's misfit repeats at the same point of every cycle (and of every
+  // load's segment); a spike does not. Measured on 332 records without outliers (rig and the
+  // independent generator, every other effect): no reading with a neighbour score above 4
+  // stood more than 5.8 off its protocol point (the largest with a level above 3: 4.0); on 64
+  // records with 5-20 % spikes, 54 had one beyond 6. Where the readings of one hold are few
+  // and noisy the removal of one spike gains nothing measurable, which is what this is for
+  // (three fresh records of the independent generator: spikes of 5 and 10 % at a turning value
+  // scored 4.6-6.8 off their neighbours and 8-16 off their protocol points, and were named
+  // `none`).
+  constexpr double kFlag = 6.0, kFirm = 8.0, kSure = 10.0;
+  constexpr double kCandidate = 4.0, kRepro = 6.0;
+  const Record& rec = ctx.rec;
+  const std::size_t n = rec.size();
+  Finding f;
+  f.effect = "outliers";
+  f.tested = true;
+  f.extended_model = "baseline refitted without the flagged readings (robust fit)";
+  // Isolated spikes: a reading far from its neighbours' mean, measured against the robust scale
+  // of that same quantity (structured residuals, smooth in time, do not produce them).
+  // Rows never held out (the segments at the extreme loads) are screened on their in-sample
+  // residuals: a spike there corrupts every fold's fit without ever being scored.
+  std::vector<double> res(n, 0.0);
+  std::vector<std::size_t> screened;
+  for (std::size_t t = 0; t < n; ++t) {
+    if (rec.fold[t] == Record::kMemoryOnly) continue;
+    res[t] =
+        rec.fold[t] == Record::kAlwaysTrained ? rec.y[t] - ctx.by_fold.front().pred[t] : ctx.r[t];
+    screened.push_back(t);
+  }
+  std::vector<double> spike, level;
+  for (std::size_t t : screened) {
+    const double left = t > 0 ? res[t - 1] : res[t + 1];
+    const double right = t + 1 < n ? res[t + 1] : res[t - 1];
+    spike.push_back(res[t] - 0.5 * (left + right));
+    level.push_back(res[t]);
+  }
+  // The scales are not taken below 0.2 % of the range: on nearly noise-free data the
+  // baseline's own kinks would otherwise stand many "sigmas" out (a spike must be at least
+  // 2.4 % of the range to be flagged).
+  const double least = 2e-3 * rec.range;
+  const double med = median(spike), scale = std::max({mad(spike), ctx.floor, least});
+  const double r_med = median(level), r_scale = std::max({mad(level), ctx.floor, least});
+  // The nearest different input before and after each reading (readings during a hold share
+  // their input): a reading at a turning value has both on the same side.
+  const double none = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> prev_u(n, none), next_u(n, none);
+  for (std::size_t t = 1; t < n; ++t)
+    prev_u[t] = rec.u[t - 1] != rec.u[t] ? rec.u[t - 1] : prev_u[t - 1];
+  for (std::size_t t = n - 1; t-- > 0;)
+    next_u[t] = rec.u[t + 1] != rec.u[t] ? rec.u[t + 1] : next_u[t + 1];
+  const ProtocolPoints points(rec, screened);
+  std::vector<double> deviation;
+  for (std::size_t t : screened) {
+    const double d = points.deviation(res, t);
+    if (!std::isnan(d)) deviation.push_back(d);
+  }
+  const double d_scale = std::max({mad(deviation), ctx.floor, least});
+  // Rows without a held-out residual (the first rise of a load test, memory-only; held-out
+  // readings beyond their fold's training range, not scored) are not screened, nor are their
+  // neighbours: a spike statistic against a missing residual means nothing. On load tests,
+  // readings with the input at its running maximum and their neighbours are left out too: the
+  // first rise ends there, and later returns to the top are met by one or two other cycles
+  // only (measured: a moving-Preisach record of the independent generator, its second return
+  // to the top load 8.4 robust sigmas off its neighbours, turning value allowance included,
+  // and removing it gained 15 %: named `outliers`). (Tests at several loads restart the
+  // baseline's memory with each segment, as the specimen's.)
+  std::vector<char> skip(n, 0);
+  for (std::size_t t = 0; t < n; ++t) skip[t] = rec.fold[t] != Record::kAlwaysTrained;
+  for (std::size_t t : ctx.scored) skip[t] = 0;
+  for (std::size_t t = 0, M = 0; t < n && !rec.several_loads; ++t) {
+    if (t == 0 || rec.seg[t] != rec.seg[t - 1]) M = t;
+    if (rec.u[t] >= rec.u[M]) {
+      M = t;
+      skip[t] = 1;
+    }
+  }
+  auto unscreened = [&](std::size_t t) {
+    return skip[t] || (t > 0 && skip[t - 1]) || (t + 1 < n && skip[t + 1]);
+  };
+  std::vector<char> flagged(n, 0);
+  int count = 0, confirmed = 0;
+  double zmax = 0.0, repro_max = 0.0;
+  for (std::size_t i = 0; i < screened.size(); ++i) {
+    const std::size_t t = screened[i];
+    if (unscreened(t)) continue;
+    // At input reversals the model's error may legitimately kink: a spike there must stand
+    // twice as far out. Segment edges are left out (their neighbours belong to another load).
+    const bool reversal = !((prev_u[t] - rec.u[t]) * (next_u[t] - rec.u[t]) < 0.0);
+    const bool seg_edge =
+        (t > 0 && rec.seg[t] != rec.seg[t - 1]) || (t + 1 < n && rec.seg[t] != rec.seg[t + 1]);
+    if (seg_edge) continue;
+    const double strict = reversal ? 2.0 : 1.0;
+    const double z = std::abs(spike[i] - med) / scale;
+    const double lv = std::abs(level[i] - r_med) / r_scale;
+    zmax = std::max(zmax, std::min(z, 1.6 * lv) / strict);
+    // The protocol-point comparison needs no allowance at reversals: a kink of the model's
+    // error there repeats at the same point of every cycle.
+    const double repro = std::abs(points.deviation(res, t)) / d_scale;  // NaN: no comparison
+    const bool repeats_not = z > kCandidate && lv > kFlag / 2.0 && repro > kRepro;
+    if (repeats_not) {
+      ++confirmed;
+      repro_max = std::max(repro_max, repro);
+    }
+    if ((z > kFlag * strict && lv > kFlag / 2.0 * strict) || repeats_not) {
+      flagged[t] = 1;
+      ++count;
+    }
+  }
+  f.score = zmax;
+  const double n_tests = static_cast<double>(n);
+  f.p_value = std::min(1.0, n_tests * std::erfc(zmax / std::sqrt(2.0)));
+  if (confirmed > 0)
+    f.p_value = std::min(f.p_value, n_tests * std::erfc(repro_max / std::sqrt(2.0)));
+  f.heldout_rms_before = f.heldout_rms_after = ctx.rms_before;
+  double gain_p = 1.0;
+  if (count > 0) {
+    // The robust fit: the baseline identified afresh without the flagged readings (its size
+    // and smoothness too: measured, spikes made cross-validation pick a larger L, and the
+    // refit with that L lost 7 % on the other readings).
+    Record robust = rec;
+    for (std::size_t t = 0; t < n; ++t) {
+      if (flagged[t]) robust.fold[t] = Record::kMemoryOnly;
+    }
+    const Baseline base(robust, ctx.opt.baseline);
+    std::vector<double> after(ctx.oof);
+    for (int k = 0; k < rec.folds; ++k) {
+      std::vector<char> train(n);
+      for (std::size_t t = 0; t < n; ++t) train[t] = robust.trains(t, k) ? 1 : 0;
+      const FoldFit fit = base.fit(train);
+      for (std::size_t t = 0; t < n; ++t) {
+        if (rec.fold[t] == k) after[t] = fit.pred[t];
+      }
+    }
+    std::vector<char> inliers(n);
+    for (std::size_t t = 0; t < n; ++t) inliers[t] = !flagged[t];
+    const Score s = score(ctx, after, inliers);
+    double ss = 0.0;
+    std::size_t m = 0;
+    for (std::size_t t : ctx.scored) {
+      if (flagged[t]) continue;
+      ss += ctx.r[t] * ctx.r[t];
+      ++m;
+    }
+    f.heldout_rms_before =
+        100.0 * std::sqrt(ss / static_cast<double>(std::max<std::size_t>(m, 1))) / rec.range;
+    f.heldout_rms_after = s.rms_after;
+    f.gain_pct = s.gain_pct;
+    gain_p = s.p_value;
+  }
+  // Removing them must help, unless the spikes are unmistakable (> kSure robust sigmas) and
+  // removing them does not hurt either (a reading whose removal worsens the held-out fit is
+  // one the model needs, whatever its residual). A reading that the others at its protocol
+  // point do not repeat is one no rate-independent model needs (it predicts them alike): named
+  // whatever its removal does to the refit, whose choice of L may move either way (measured:
+  // two 5 % spikes at the lowest load of a repeated rig protocol, confirmed at 8.5 sigmas,
+  // refitted without them lost 3.8 % on the other readings).
+  // Below kFirm the score is a signature at a level no record without spikes reached (5.5,
+  // above), so, as for the other signatures, the gain's test is at gain_alpha (intersection-
+  // union; measured: a 5 % spike on an independent generator's damped record scored 6.9 and
+  // removing it gained 10 % at p = 0.010, which alpha missed by one resample).
+  const bool gains = confirmed > 0 || (zmax > kSure   ? f.gain_pct > -1.0
+                                       : zmax > kFirm ? f.gain_pct > 1.0
+                                                      : f.gain_pct >= ctx.opt.min_gain_pct &&
+                                                            gain_p < ctx.opt.gain_alpha);
+  f.detected = count > 0 && f.p_value < ctx.opt.alpha && gains;
+  f.evidence = fmt::format(
+      "{} reading(s) stand more than {:g} robust sigmas off their neighbours (largest {:.1f}), "
+      "or more than {:g} off them and {:g} off the readings at the same point of the protocol "
+      "elsewhere ({} such, largest {:.1f}); without them the held-out E_RMS on the other "
+      "readings goes from {:.3f} to {:.3f} % of range (sign-flip p = {:.3f})",
+      count, kFlag, zmax, kCandidate, kRepro, confirmed, repro_max, f.heldout_rms_before,
+      f.heldout_rms_after, gain_p);
+  return f;
+}
+
+}  // namespace scpkit::diagnosis
