@@ -71,12 +71,13 @@ Finding detect_outliers(Context& ctx) {
   //
   // A spike is also confirmed where the protocol repeats: a reading more than kCandidate off
   // its neighbours (and kFlag / 2 off the median) that stands more than kRepro robust sigmas
-  // off the readings at the same protocol point elsewhere (ProtocolPoints) is named unless
-  // removing it hurts. A model's misfit repeats at the same point of every cycle (and of every
-  // load's segment); a spike does not. Measured on 332 records without outliers (rig and the
-  // independent generator, every other effect): no reading with a neighbour score above 4
-  // stood more than 5.8 off its protocol point (the largest with a level above 3: 4.0); on 64
-  // records with 5-20 % spikes, 54 had one beyond 6. Where the readings of one hold are few
+  // off the readings at the same protocol point elsewhere (ProtocolPoints) is named whatever
+  // removing it does to the refit. A model's misfit repeats at the same point of every cycle
+  // (and of every load's segment); a spike does not. Measured with a prototype (points keyed
+  // by the inputs before and after) on 332 records without outliers (rig and the independent
+  // generator, every other effect): no reading with a neighbour score above 4 and a level
+  // above 3 stood more than 4.0 off its protocol point; on 64 records with 5-20 % spikes, 54
+  // had one beyond 6. Where the readings of one hold are few
   // and noisy the removal of one spike gains nothing measurable, which is what this is for
   // (three fresh records of the independent generator: spikes of 5 and 10 % at a turning value
   // scored 4.6-6.8 off their neighbours and 8-16 off their protocol points, and were named
@@ -123,12 +124,12 @@ Finding detect_outliers(Context& ctx) {
   for (std::size_t t = n - 1; t-- > 0;)
     next_u[t] = rec.u[t + 1] != rec.u[t] ? rec.u[t + 1] : next_u[t + 1];
   const ProtocolPoints points(rec, screened);
-  std::vector<double> deviation;
+  std::vector<double> deviation(n, none), compared;
   for (std::size_t t : screened) {
-    const double d = points.deviation(res, t);
-    if (!std::isnan(d)) deviation.push_back(d);
+    deviation[t] = points.deviation(res, t);
+    if (!std::isnan(deviation[t])) compared.push_back(deviation[t]);
   }
-  const double d_scale = std::max({mad(deviation), ctx.floor, least});
+  const double d_scale = std::max({mad(compared), ctx.floor, least});
   // Rows without a held-out residual (the first rise of a load test, memory-only; held-out
   // readings beyond their fold's training range, not scored) are not screened, nor are their
   // neighbours: a spike statistic against a missing residual means nothing. On load tests,
@@ -170,7 +171,7 @@ Finding detect_outliers(Context& ctx) {
     if (!at_top) zmax = std::max(zmax, std::min(z, 1.6 * lv) / strict);
     // The protocol-point comparison needs no allowance at reversals: a kink of the model's
     // error there repeats at the same point of every cycle.
-    const double repro = std::abs(points.deviation(res, t)) / d_scale;  // NaN: no comparison
+    const double repro = std::abs(deviation[t]) / d_scale;  // NaN: no comparison
     const bool repeats_not = z > kCandidate && lv > kFlag / 2.0 && repro > kRepro;
     if (repeats_not) {
       ++confirmed;
