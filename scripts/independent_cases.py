@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Test files for `scpkit diagnose` from a generator independent of the project's rig.
 
-Usage: scripts/independent_cases.py OUT_DIR N [FIRST]   (N files per effect and side, seeds
-FIRST..FIRST+N-1; file names SIDE-EFFECT-I.csv carry the truth). Then
+Usage: scripts/independent_cases.py OUT_DIR N [FIRST [SIDE-EFFECT]]   (N files per effect and
+side, seeds FIRST..FIRST+N-1; file names SIDE-EFFECT-I.csv carry the truth; SIDE-EFFECT, e.g.
+load-none, makes that kind only, with the same seeds). Then
 scripts/independent_run.sh OUT_DIR prints one line per file: name, truth, named cause.
 
 Written apart from lib/src/rig (plain Python, no numpy): a relay-grid Preisach truth with a
@@ -197,10 +198,13 @@ MAGS = {
 if __name__ == "__main__":
     outdir, n = sys.argv[1], int(sys.argv[2])
     first = int(sys.argv[3]) if len(sys.argv) > 3 else 0
+    only = sys.argv[4] if len(sys.argv) > 4 else None
     os.makedirs(outdir, exist_ok=True)
     for side, effects in [("load", ["none", "drift", "outliers", "creep", "minor_loop_noncongruence"]),
                           ("voltage", ["none", "drift", "outliers", "creep", "lonely_stroke", "load_shape_coupling", "offset_nonlinearity"])]:
         for e in effects:
+            if only is not None and only != f"{side}-{e}":
+                continue
             for i in range(first, first + n):
                 rng = random.Random(i * 7919 + len(e) * 31 + (0 if side == "load" else 100000))
                 mag = MAGS[e][i % len(MAGS[e])]

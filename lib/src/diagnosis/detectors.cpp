@@ -151,8 +151,8 @@ Context::Context(const Record& record, const Baseline& b, const DiagnoseOptions&
     if (i > 0 && scored[i - 1] + 1 == t) dr.push_back(r[t] - r[t - 1]);
   }
   const double white = dr.size() >= 10 ? mad(dr) / std::sqrt(2.0) : mad(rs);
-  const double q = quantisation_step(rec.y);
-  floor = std::sqrt(white * white + q * q / 12.0);
+  resolution = quantisation_step(rec.y);
+  floor = std::sqrt(white * white + resolution * resolution / 12.0);
   rms_before = 100.0 * rms(rs) / rec.range;
   return_point = return_point_signatures(rec, floor);
   congruency = congruency_signature(rec);
