@@ -23,6 +23,7 @@ struct Context {
   std::vector<std::size_t> scored;               ///< rows held out in some fold
   std::vector<std::vector<std::size_t>> blocks;  ///< consecutive scored rows, for the tests
   double floor = 0.0;                            ///< noise sigma (output units)
+  double white = 0.0;                            ///< the floor's white part
   double resolution = 0.0;                       ///< sensor step (0: continuous)
   double rms_before = 0.0;                       ///< % of range
   ReturnPointSignatures return_point;            ///< model-free (signatures.hpp)
