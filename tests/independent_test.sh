@@ -18,7 +18,10 @@
 #   memory state by design (`lonely_stroke`);
 # - two clean load records of seeds 1000-1299 (300 made, 13 false alarms) named `outliers`
 #   before the spike screen left out the prediction's zigzag and steps between holds: 1098,
-#   a held-out rise whose prediction alternates reading by reading, and 1079, holds of three.
+#   a held-out rise whose prediction alternates reading by reading, and 1079, holds of three;
+# - the clean load record of seed 900 (0.04 mm sensor step, 0.01 mm noise), named
+#   `minor_loop_noncongruence` by its output map's gain alone before that path required a
+#   sensor step below twice the white noise.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -31,6 +34,7 @@ python3 "$src/scripts/independent_cases.py" "$work/fresh" 4 700 || exit 1
 python3 "$src/scripts/independent_cases.py" "$work/fresh" 4 800 || exit 1
 python3 "$src/scripts/independent_cases.py" "$work/clean" 1 1079 load-none || exit 1
 python3 "$src/scripts/independent_cases.py" "$work/clean" 1 1098 load-none || exit 1
+python3 "$src/scripts/independent_cases.py" "$work/clean" 1 900 load-none || exit 1
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
