@@ -21,7 +21,9 @@
 #   a held-out rise whose prediction alternates reading by reading, and 1079, holds of three;
 # - the clean load record of seed 900 (0.04 mm sensor step, 0.01 mm noise), named
 #   `minor_loop_noncongruence` by its output map's gain alone before that path required a
-#   sensor step below twice the white noise.
+#   sensor step below twice the white noise;
+# - a 10 % load creep of seed 1101 read three times per hold at 0.02 mm noise, named `none`
+#   before its hold signature could name it alone (`creep`).
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -35,6 +37,7 @@ python3 "$src/scripts/independent_cases.py" "$work/fresh" 4 800 || exit 1
 python3 "$src/scripts/independent_cases.py" "$work/clean" 1 1079 load-none || exit 1
 python3 "$src/scripts/independent_cases.py" "$work/clean" 1 1098 load-none || exit 1
 python3 "$src/scripts/independent_cases.py" "$work/clean" 1 900 load-none || exit 1
+python3 "$src/scripts/independent_cases.py" "$work/fresh" 1 1101 load-creep || exit 1
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -54,5 +57,6 @@ expect "$work/fresh/voltage-drift-602.csv" drift
 expect "$work/fresh/load-outliers-703.csv" outliers
 expect "$work/fresh/voltage-outliers-700.csv" outliers
 expect "$work/fresh/voltage-lonely_stroke-800.csv" lonely_stroke
+expect "$work/fresh/load-creep-1101.csv" creep
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]
