@@ -199,9 +199,13 @@ if __name__ == "__main__":
     outdir, n = sys.argv[1], int(sys.argv[2])
     first = int(sys.argv[3]) if len(sys.argv) > 3 else 0
     only = sys.argv[4] if len(sys.argv) > 4 else None
+    kinds = [("load", ["none", "drift", "outliers", "creep", "minor_loop_noncongruence"]),
+             ("voltage", ["none", "drift", "outliers", "creep", "lonely_stroke", "load_shape_coupling", "offset_nonlinearity"])]
+    names = [f"{side}-{e}" for side, effects in kinds for e in effects]
+    if only is not None and only not in names:
+        sys.exit(f"independent_cases.py: unknown kind '{only}' (one of: {', '.join(names)})")
     os.makedirs(outdir, exist_ok=True)
-    for side, effects in [("load", ["none", "drift", "outliers", "creep", "minor_loop_noncongruence"]),
-                          ("voltage", ["none", "drift", "outliers", "creep", "lonely_stroke", "load_shape_coupling", "offset_nonlinearity"])]:
+    for side, effects in kinds:
         for e in effects:
             if only is not None and only != f"{side}-{e}":
                 continue

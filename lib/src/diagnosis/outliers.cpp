@@ -15,6 +15,11 @@
 namespace scpkit::diagnosis {
 namespace {
 
+/// Whether the adjacent readings a and b belong to one hold: the same input in one segment.
+bool same_hold(const Record& rec, std::size_t a, std::size_t b) {
+  return rec.u[a] == rec.u[b] && rec.seg[a] == rec.seg[b];
+}
+
 /// The readings taken at the same point of the protocol: in the same memory state of the
 /// operator (signatures.hpp; across the segments of a test at several loads too), with the
 /// same running maximum of the input since the segment began, and at the same place in their
@@ -34,7 +39,7 @@ class ProtocolPoints {
     for (std::size_t t = 0; t < rec.size(); ++t) {
       const bool start = t == 0 || rec.seg[t] != rec.seg[t - 1];
       running_max = start ? rec.u[t] : std::max(running_max, rec.u[t]);
-      const bool held = !start && rec.u[t] == rec.u[t - 1];
+      const bool held = t > 0 && same_hold(rec, t - 1, t);
       in_hold = held ? in_hold + 1 : 0;
       key_[t] = states[t];
       key_[t].push_back(std::lround((running_max - *umin) / span * 1e7));
@@ -160,11 +165,11 @@ Finding detect_outliers(Context& ctx) {
   // a reading is not screened where the prediction's spike statistics alternate in sign over
   // three consecutive readings, each beyond kCandidate. (A kink of the prediction at a
   // turning value moves one statistic only; a spike in the data, or a cluster of them, none.)
+  auto pred = [&](std::size_t s) { return rec.y[s] - res[s]; };
   std::vector<double> bend(n, 0.0);
   for (std::size_t i = 1; i + 1 < screened.size(); ++i) {
     const std::size_t t = screened[i];
     if (screened[i - 1] + 1 != t || screened[i + 1] != t + 1) continue;
-    auto pred = [&](std::size_t s) { return rec.y[s] - res[s]; };
     bend[t] = (pred(t) - 0.5 * (pred(t - 1) + pred(t + 1))) / scale;
   }
   auto zigzag = [&](std::size_t t) {
@@ -182,8 +187,8 @@ Finding detect_outliers(Context& ctx) {
   // the previous hold and its mate, but level with the mate), a spike does not share it.
   auto steps_with_hold = [&](std::size_t i) {
     const std::size_t t = screened[i];
-    const bool mate_left = t > 0 && rec.u[t - 1] == rec.u[t] && rec.seg[t - 1] == rec.seg[t];
-    const bool mate_right = t + 1 < n && rec.u[t + 1] == rec.u[t] && rec.seg[t + 1] == rec.seg[t];
+    const bool mate_left = t > 0 && same_hold(rec, t - 1, t);
+    const bool mate_right = t + 1 < n && same_hold(rec, t, t + 1);
     if (mate_left == mate_right) return false;
     const double own = std::abs(res[t] - res[mate_left ? t - 1 : t + 1]);
     return own < 0.5 * std::abs(spike[i] - med);
