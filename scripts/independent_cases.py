@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
 """Test files for `scpkit diagnose` from a generator independent of the project's rig.
 
-Usage: scripts/independent_cases.py OUT_DIR N [FIRST [SIDE-EFFECT]]   (N files per effect and
-side, seeds FIRST..FIRST+N-1; file names SIDE-EFFECT-I.csv carry the truth; SIDE-EFFECT, e.g.
-load-none, makes that kind only, with the same seeds). Then
+Usage: scripts/independent_cases.py OUT_DIR N [FIRST [SIDE-EFFECT]] [--once-per-hold]   (N
+files per effect and side, seeds FIRST..FIRST+N-1; file names SIDE-EFFECT-I.csv carry the truth;
+SIDE-EFFECT, e.g. load-none, makes that kind only, with the same seeds; --once-per-hold reads
+voltage creep once per hold instead of three times, all else alike). Then
 scripts/independent_run.sh OUT_DIR prints one line per file: name, truth, named cause.
 
 Written apart from lib/src/rig (plain Python, no numpy): a relay-grid Preisach truth with a
@@ -144,7 +145,7 @@ def make_voltage(rng, effect, mag, out):
     dwell = rng.choice([10.0, 30.0, 60.0])
     noise = rng.choice([0.005, 0.01, 0.02])
     q = rng.choice([0.0, 0.01, 0.04])
-    per_hold = 3 if effect == "creep" else 1
+    per_hold = 3 if effect == "creep" and not ONCE_PER_HOLD else 1
     tau = dwell * rng.uniform(0.3, 1.0)
     L = 70.0
     seq = []
@@ -195,10 +196,13 @@ MAGS = {
     "lonely_stroke": [0.03, 0.06, 0.1], "load_shape_coupling": [0.3, 0.6, 1.0],
     "offset_nonlinearity": [0.05, 0.1, 0.2],
 }
+ONCE_PER_HOLD = False  # --once-per-hold: voltage creep read once per hold (no readings during holds)
 if __name__ == "__main__":
-    outdir, n = sys.argv[1], int(sys.argv[2])
-    first = int(sys.argv[3]) if len(sys.argv) > 3 else 0
-    only = sys.argv[4] if len(sys.argv) > 4 else None
+    args = [a for a in sys.argv[1:] if a != "--once-per-hold"]
+    ONCE_PER_HOLD = len(args) < len(sys.argv) - 1
+    outdir, n = args[0], int(args[1])
+    first = int(args[2]) if len(args) > 2 else 0
+    only = args[3] if len(args) > 3 else None
     kinds = [("load", ["none", "drift", "outliers", "creep", "minor_loop_noncongruence"]),
              ("voltage", ["none", "drift", "outliers", "creep", "lonely_stroke", "load_shape_coupling", "offset_nonlinearity"])]
     names = [f"{side}-{e}" for side, effects in kinds for e in effects]

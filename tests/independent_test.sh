@@ -23,7 +23,12 @@
 #   `minor_loop_noncongruence` by its output map's gain alone before that path required a
 #   sensor step below twice the white noise;
 # - a 10 % load creep of seed 1101 read three times per hold at 0.02 mm noise, named `none`
-#   before its hold signature could name it alone (`creep`).
+#   before its hold signature could name it alone (`creep`);
+# - a 3 % voltage lonely stroke of seed 1203 whose creep extension out-gained the running-maximum
+#   term by 22.4 % to 22.0 % and was named `creep` before creep read once per hold needed 1.25
+#   times the lonely stroke's gain to be named over its return-point offset (`lonely_stroke`),
+#   and a voltage creep of seed 3107 read once per hold (--once-per-hold), whose lonely-stroke
+#   term is detected and seen at its return points but gains 1.6 times less (`creep`).
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -38,6 +43,9 @@ python3 "$src/scripts/independent_cases.py" "$work/clean" 1 1079 load-none || ex
 python3 "$src/scripts/independent_cases.py" "$work/clean" 1 1098 load-none || exit 1
 python3 "$src/scripts/independent_cases.py" "$work/clean" 1 900 load-none || exit 1
 python3 "$src/scripts/independent_cases.py" "$work/fresh" 1 1101 load-creep || exit 1
+python3 "$src/scripts/independent_cases.py" "$work/fresh" 1 1203 voltage-lonely_stroke || exit 1
+python3 "$src/scripts/independent_cases.py" "$work/fresh" 1 3107 voltage-creep --once-per-hold ||
+  exit 1
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -58,5 +66,7 @@ expect "$work/fresh/load-outliers-703.csv" outliers
 expect "$work/fresh/voltage-outliers-700.csv" outliers
 expect "$work/fresh/voltage-lonely_stroke-800.csv" lonely_stroke
 expect "$work/fresh/load-creep-1101.csv" creep
+expect "$work/fresh/voltage-lonely_stroke-1203.csv" lonely_stroke
+expect "$work/fresh/voltage-creep-3107.csv" creep
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]

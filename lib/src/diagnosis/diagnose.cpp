@@ -34,6 +34,9 @@ const std::vector<std::string>& effect_names() {
 
 namespace {
 constexpr double kMaterialPct = 1.0;  ///< % of range: the least residual error called structure
+/// Creep known by its gain alone is named over a lonely stroke seen at its return points only
+/// when it gains this many times as much on held-out data.
+constexpr double kCreepOverLonely = 1.25;
 
 /// Held-out E_RMS (% of range) without the largest 5 % of the residuals.
 double sustained_rms_pct(const diagnosis::Context& ctx) {
@@ -107,7 +110,13 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   const Finding* lonely = detected("lonely_stroke");
   const bool lonely_seen = lonely && ctx.return_point.running_max.available &&
                            ctx.return_point.running_max.p_value < opt.alpha;
-  if (!best && lonely_seen && !(creep && creep->gain_pct > lonely->gain_pct)) best = lonely;
+  // Gains that nearly tie go to the lonely stroke, whose return-point offset is model-free
+  // evidence that creep read once per hold lacks: measured on 48 independent-generator voltage
+  // records of a lonely stroke (creep also detected in 46), creep gained at most 1.15 times what
+  // the running-maximum term gained (4 named creep before this margin); on 5 creep records read
+  // once per hold where the lonely stroke was seen too, 1.45 to 2.2 times.
+  if (!best && lonely_seen && !(creep && creep->gain_pct > kCreepOverLonely * lonely->gain_pct))
+    best = lonely;
   // Likewise a drift whose return-point time signature is significant is named ahead of a
   // lonely stroke whose own return-point offset is not: a trend within each segment gives the
   // running-maximum term a gain (measured: a fresh independent-generator record, drift of 12 %,
