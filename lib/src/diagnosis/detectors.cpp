@@ -156,6 +156,7 @@ Context::Context(const Record& record, const Baseline& b, const DiagnoseOptions&
   rms_before = 100.0 * rms(rs) / rec.range;
   return_point = return_point_signatures(rec, floor);
   congruency = congruency_signature(rec);
+  congruency_robust = congruency_signature(rec, BranchChange::kRobust);
   holds = hold_signature(rec, floor);
 }
 

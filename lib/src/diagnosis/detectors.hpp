@@ -28,6 +28,7 @@ struct Context {
   double rms_before = 0.0;                       ///< % of range
   ReturnPointSignatures return_point;            ///< model-free (signatures.hpp)
   Signature congruency, holds;
+  Signature congruency_robust;  ///< the same, blind to single readings off their neighbours
   Signature dwell;  ///< creep with one reading per hold: residuals against the hold times
   std::mt19937_64 rng;
 

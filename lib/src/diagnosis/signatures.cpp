@@ -235,7 +235,25 @@ ReturnPointSignatures return_point_signatures(const Record& rec, double sigma) {
   return out;
 }
 
-Signature congruency_signature(const Record& rec) {
+namespace {
+
+// Running median of three, the ends by Tukey's rule median(d0, d1, 3 d1 - 2 d2), so a straight
+// line passes unchanged; n >= 3.
+Eigen::VectorXd running_median3(const Eigen::VectorXd& d) {
+  const Eigen::Index n = d.size();
+  auto med = [](double a, double b, double c) {
+    return std::max(std::min(a, b), std::min(std::max(a, b), c));
+  };
+  Eigen::VectorXd m = d;
+  for (Eigen::Index i = 1; i + 1 < n; ++i) m[i] = med(d[i - 1], d[i], d[i + 1]);
+  m[0] = med(d[0], m[1], 3.0 * m[1] - 2.0 * m[2]);
+  m[n - 1] = med(d[n - 1], m[n - 2], 3.0 * m[n - 2] - 2.0 * m[n - 3]);
+  return m;
+}
+
+}  // namespace
+
+Signature congruency_signature(const Record& rec, BranchChange change) {
   const Walk w = walk(rec);
   const double tol = 1e-6 * w.span;
   // Monotone branches on the collapsed readings: [first, last] positions in w.idx, the first
@@ -315,7 +333,16 @@ Signature congruency_signature(const Record& rec) {
     Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(V);
     if (qr.rank() < degree + 1) continue;
     const Eigen::VectorXd fitted = V * qr.solve(D);
-    explained += (fitted.array() - D.mean()).square().sum();
+    // Robust: what changes along the branch is read off d smoothed by a running median of
+    // three. A smooth change passes unchanged (a monotone sequence is its fixed point), one
+    // reading off its neighbours (a spike, which at a turning value enters every pair that
+    // starts or ends there) does not. The scatter stays the raw d's about their own fit.
+    if (change == BranchChange::kRobust) {
+      const Eigen::VectorXd Ds = running_median3(D);
+      explained += ((V * qr.solve(Ds)).array() - Ds.mean()).square().sum();
+    } else {
+      explained += (fitted.array() - D.mean()).square().sum();
+    }
     sse += (D - fitted).squaredNorm();
     dof += static_cast<int>(n - degree - 1);
     terms += static_cast<int>(degree);
