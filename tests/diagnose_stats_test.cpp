@@ -98,11 +98,12 @@ TEST(CongruencySignature, CalibratedOnCongruentLoops) {
   for (double noise : {0.003, 0.01, 0.03}) {
     for (int i = 0; i < 150; ++i) {
       const Record rec = congruent_loops(rng, noise);
-      const Signature s = congruency_signature(rec);
+      const CongruencySignatures both = congruency_signatures(rec);
+      const Signature& s = both.raw;
       ASSERT_TRUE(s.available);
       below_1 += s.p_value < 0.01 ? 1 : 0;
       below_5 += s.p_value < 0.05 ? 1 : 0;
-      const Signature r = congruency_signature(rec, BranchChange::kRobust);
+      const Signature& r = both.robust;
       robust_below_1 += r.p_value < 0.01 ? 1 : 0;
       robust_below_5 += r.p_value < 0.05 ? 1 : 0;
       ++trials;
@@ -138,7 +139,7 @@ TEST(CongruencySignature, ASpikeAtATurningValueIsNotNonCongruence) {
     ASSERT_GE(turns.size(), 4U);
     const std::size_t t = turns[static_cast<std::size_t>(i) % turns.size()];
     rec.y[t] += (i % 2 == 0 ? 1.0 : -1.0) * size(rng) * noise * rec.range;
-    const Signature s = congruency_signature(rec, BranchChange::kRobust);
+    const Signature s = congruency_signatures(rec).robust;
     ASSERT_TRUE(s.available);
     below_01 += s.p_value < 0.001 ? 1 : 0;
     below_1 += s.p_value < 0.01 ? 1 : 0;

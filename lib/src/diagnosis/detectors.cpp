@@ -155,8 +155,9 @@ Context::Context(const Record& record, const Baseline& b, const DiagnoseOptions&
   floor = std::sqrt(white * white + resolution * resolution / 12.0);
   rms_before = 100.0 * rms(rs) / rec.range;
   return_point = return_point_signatures(rec, floor);
-  congruency = congruency_signature(rec);
-  congruency_robust = congruency_signature(rec, BranchChange::kRobust);
+  const CongruencySignatures loops = congruency_signatures(rec);
+  congruency = loops.raw;
+  congruency_robust = loops.robust;
   holds = hold_signature(rec, floor);
 }
 

@@ -253,7 +253,7 @@ Eigen::VectorXd running_median3(const Eigen::VectorXd& d) {
 
 }  // namespace
 
-Signature congruency_signature(const Record& rec, BranchChange change) {
+CongruencySignatures congruency_signatures(const Record& rec) {
   const Walk w = walk(rec);
   const double tol = 1e-6 * w.span;
   // Monotone branches on the collapsed readings: [first, last] positions in w.idx, the first
@@ -283,7 +283,7 @@ Signature congruency_signature(const Record& rec, BranchChange change) {
   // as they are in these data, whatever the noise model).
   // Per pair, the part of d that changes along the branch (a line, or a parabola on six or
   // more readings: loops may differ in height or in shape) as explained sum of squares.
-  double explained = 0.0, sse = 0.0;
+  double explained = 0.0, explained_robust = 0.0, sse = 0.0;
   int terms = 0, pairs = 0;
   int dof = 0;
   for (std::size_t q = 0; q < branches.size(); ++q) {
@@ -333,24 +333,22 @@ Signature congruency_signature(const Record& rec, BranchChange change) {
     Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(V);
     if (qr.rank() < degree + 1) continue;
     const Eigen::VectorXd fitted = V * qr.solve(D);
+    explained += (fitted.array() - D.mean()).square().sum();
     // Robust: what changes along the branch is read off d smoothed by a running median of
     // three. A smooth change passes unchanged (a monotone sequence is its fixed point), one
     // reading off its neighbours (a spike, which at a turning value enters every pair that
     // starts or ends there) does not. The scatter stays the raw d's about their own fit.
-    if (change == BranchChange::kRobust) {
-      const Eigen::VectorXd Ds = running_median3(D);
-      explained += ((V * qr.solve(Ds)).array() - Ds.mean()).square().sum();
-    } else {
-      explained += (fitted.array() - D.mean()).square().sum();
-    }
+    const Eigen::VectorXd Ds = running_median3(D);
+    explained_robust += ((V * qr.solve(Ds)).array() - Ds.mean()).square().sum();
     sse += (D - fitted).squaredNorm();
     dof += static_cast<int>(n - degree - 1);
     terms += static_cast<int>(degree);
     ++pairs;
   }
-  Signature s;
-  s.what = "monotone branches from the same turning value after different histories";
-  if (pairs == 0 || dof < 8) return s;
+  CongruencySignatures out;
+  out.raw.what = "monotone branches from the same turning value after different histories";
+  out.robust.what = out.raw.what + " (spike-robust)";
+  if (pairs == 0 || dof < 8) return out;
   // A quantised sensor resolves no difference below its step: the variance of a difference of
   // two readings is taken no smaller than q^2 / 6 (both rounded independently); and a
   // difference below 0.1 % of the range is immaterial (interpolating A between readings on a
@@ -359,16 +357,20 @@ Signature congruency_signature(const Record& rec, BranchChange change) {
   const double least = 1e-3 * rec.range;
   const double scatter = sse / dof;
   const double var = std::max({scatter, q * q / 6.0, least * least});
-  const double chi2 = explained / var;
-  s.available = true;
-  s.units = pairs;
-  s.estimate = std::sqrt(chi2 / terms);
-  s.z = s.estimate;
-  // Against the scatter, estimated from dof residuals, the ratio is F(terms, dof), whose tail
-  // is far heavier than chi-square's when dof is small (at terms 16, dof 8 a ratio of 2.9 is
-  // p = 1e-4 as chi-square and 0.06 as F); against a floor, a known variance, chi-square.
-  s.p_value = var > scatter ? chi_square_upper(chi2, terms) : f_upper(chi2 / terms, terms, dof);
-  return s;
+  auto test = [&](Signature& s, double change) {
+    const double chi2 = change / var;
+    s.available = true;
+    s.units = pairs;
+    s.estimate = std::sqrt(chi2 / terms);
+    s.z = s.estimate;
+    // Against the scatter, estimated from dof residuals, the ratio is F(terms, dof), whose tail
+    // is far heavier than chi-square's when dof is small (at terms 16, dof 8 a ratio of 2.9 is
+    // p = 1e-4 as chi-square and 0.06 as F); against a floor, a known variance, chi-square.
+    s.p_value = var > scatter ? chi_square_upper(chi2, terms) : f_upper(chi2 / terms, terms, dof);
+  };
+  test(out.raw, explained);
+  test(out.robust, explained_robust);
+  return out;
 }
 
 Signature hold_signature(const Record& rec, double sigma) {

@@ -43,11 +43,13 @@ std::vector<std::vector<long>> memory_states(const Record& rec);
 /// `sigma`: the noise of one reading (the diagnosis' floor).
 ReturnPointSignatures return_point_signatures(const Record& rec, double sigma);
 /// Minor loops between the same extrema after different histories: does the difference of two
-/// branches change along them? `kRobust` reads that change through a running median of three,
-/// so that one reading off its neighbours (a spike) does not count; it is conservative (on
-/// congruent loops 1.6 % of p-values below 0.05), a check beside the calibrated `kRaw` test.
-enum class BranchChange { kRaw, kRobust };
-Signature congruency_signature(const Record& rec, BranchChange change = BranchChange::kRaw);
+/// branches change along them? `raw` is the calibrated test; `robust` reads that change through
+/// a running median of three, so that one reading off its neighbours (a spike) does not count.
+/// It is conservative (on congruent loops 1.6 % of p-values below 0.05), a check beside `raw`.
+struct CongruencySignatures {
+  Signature raw, robust;
+};
+CongruencySignatures congruency_signatures(const Record& rec);
 /// One-sided: motion during holds in the direction of the last input step.
 Signature hold_signature(const Record& rec, double sigma);
 
