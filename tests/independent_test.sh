@@ -28,7 +28,14 @@
 #   term by 22.4 % to 22.0 % and was named `creep` before creep read once per hold needed 1.25
 #   times the lonely stroke's gain to be named over its return-point offset (`lonely_stroke`),
 #   and a voltage creep of seed 3107 read once per hold (--once-per-hold), whose lonely-stroke
-#   term is detected and seen at its return points but gains 1.6 times less (`creep`).
+#   term is detected and seen at its return points but gains 1.6 times less (`creep`);
+# - spikes behind a coarse baseline (L = 8, its misfit six times the noise), named `none` before
+#   spikes were compared with their protocol points on the readings themselves (7002: 5 % at
+#   0.005 mm noise on a damped record, 3.8 robust sigmas off its neighbours, 20.7 scales of the
+#   readings' scatter off its protocol point) and with a single other reading there (7027: a
+#   10 % spike met once more, in the last descent); and a clean record at a 0.04 mm sensor step
+#   and 0.005 mm noise (1126), whose readings at equal protocol points are equal but for one
+#   step now and then, which the scale's floor of half a step keeps from counting (`none`).
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -46,6 +53,9 @@ python3 "$src/scripts/independent_cases.py" "$work/fresh" 1 1101 load-creep || e
 python3 "$src/scripts/independent_cases.py" "$work/fresh" 1 1203 voltage-lonely_stroke || exit 1
 python3 "$src/scripts/independent_cases.py" "$work/fresh" 1 3107 voltage-creep --once-per-hold ||
   exit 1
+python3 "$src/scripts/independent_cases.py" "$work/fresh" 1 7002 load-outliers || exit 1
+python3 "$src/scripts/independent_cases.py" "$work/fresh" 1 7027 load-outliers || exit 1
+python3 "$src/scripts/independent_cases.py" "$work/clean" 1 1126 load-none || exit 1
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -68,5 +78,7 @@ expect "$work/fresh/voltage-lonely_stroke-800.csv" lonely_stroke
 expect "$work/fresh/load-creep-1101.csv" creep
 expect "$work/fresh/voltage-lonely_stroke-1203.csv" lonely_stroke
 expect "$work/fresh/voltage-creep-3107.csv" creep
+expect "$work/fresh/load-outliers-7002.csv" outliers
+expect "$work/fresh/load-outliers-7027.csv" outliers
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]
