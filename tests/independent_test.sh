@@ -35,7 +35,9 @@
 #   readings' scatter off its protocol point) and with a single other reading there (7027: a
 #   10 % spike met once more, in the last descent); and a clean record at a 0.04 mm sensor step
 #   and 0.005 mm noise (1126), whose readings at equal protocol points are equal but for one
-#   step now and then, which the scale's floor of half a step keeps from counting (`none`).
+#   step now and then, which the scale's floor of half a step keeps from counting (`none`);
+# - a moving Preisach of seed 1403 (loops 0.088 mm apart at 0.005 mm noise), congruency p 1e-4
+#   and spike-robust p 0.0017, named `none` while the robust reading had to pass alpha / 10.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -56,6 +58,8 @@ python3 "$src/scripts/independent_cases.py" "$work/fresh" 1 3107 voltage-creep -
 python3 "$src/scripts/independent_cases.py" "$work/fresh" 1 7002 load-outliers || exit 1
 python3 "$src/scripts/independent_cases.py" "$work/fresh" 1 7027 load-outliers || exit 1
 python3 "$src/scripts/independent_cases.py" "$work/clean" 1 1126 load-none || exit 1
+python3 "$src/scripts/independent_cases.py" "$work/fresh" 1 1403 load-minor_loop_noncongruence ||
+  exit 1
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -80,5 +84,6 @@ expect "$work/fresh/voltage-lonely_stroke-1203.csv" lonely_stroke
 expect "$work/fresh/voltage-creep-3107.csv" creep
 expect "$work/fresh/load-outliers-7002.csv" outliers
 expect "$work/fresh/load-outliers-7027.csv" outliers
+expect "$work/fresh/load-minor_loop_noncongruence-1403.csv" minor_loop_noncongruence
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]
