@@ -50,7 +50,8 @@ class ProtocolPoints {
   }
   /// r[t] minus the median of r at the same point elsewhere; NaN where there is none. (With
   /// one other reading the difference does not say which of the two is off: the callers ask
-  /// that t stand out from its neighbours too, and more than the other does.)
+  /// that t stand out from its neighbours too, and off_alone that it stand out more than the
+  /// other does.)
   double deviation(const std::vector<double>& r, std::size_t t) const {
     std::vector<double> others;
     for (std::size_t s : points_.at(key_[t])) {
@@ -159,12 +160,14 @@ Finding detect_outliers(Context& ctx) {
   // largest 5 %, over 0.871 (its ratio to sigma for a normal); at least half a sensor step
   // (readings of one true value round alike, so a step is rare but not a spike) and 1e-4 of
   // the range.
+  // Each screened reading's distance off its neighbours, in robust sigmas.
+  std::vector<double> z(n, 0.0);
+  for (std::size_t i = 0; i < screened.size(); ++i)
+    z[screened[i]] = std::abs(spike[i] - med) / scale;
   const std::vector<double> off_alone = [&] {
     std::vector<double> off(n, 0.0);
     if (rec.several_loads) return off;
-    std::vector<double> dev(n, none), sq, z(n, 0.0);
-    for (std::size_t i = 0; i < screened.size(); ++i)
-      z[screened[i]] = std::abs(spike[i] - med) / scale;
+    std::vector<double> dev(n, none), sq;
     for (std::size_t t : screened) {
       dev[t] = points.deviation(rec.y, t);
       if (!std::isnan(dev[t])) sq.push_back(dev[t] * dev[t]);
@@ -276,18 +279,17 @@ Finding detect_outliers(Context& ctx) {
         (t > 0 && rec.seg[t] != rec.seg[t - 1]) || (t + 1 < n && rec.seg[t] != rec.seg[t + 1]);
     if (seg_edge) continue;
     const double strict = reversal ? 2.0 : 1.0;
-    const double z = std::abs(spike[i] - med) / scale;
     const double lv = std::abs(level[i] - r_med) / r_scale;
-    if (!at_top) zmax = std::max(zmax, std::min(z, 1.6 * lv) / strict);
+    if (!at_top) zmax = std::max(zmax, std::min(z[t], 1.6 * lv) / strict);
     // The protocol-point comparison needs no allowance at reversals: a kink of the model's
     // error there repeats at the same point of every cycle.
     const double repro = std::abs(deviation[t]) / d_scale;  // NaN: no comparison
-    const bool repeats_not = z > kCandidate && lv > kFlag / 2.0 && repro > kRepro;
+    const bool repeats_not = z[t] > kCandidate && lv > kFlag / 2.0 && repro > kRepro;
     if (repeats_not) {
       ++confirmed;
       repro_max = std::max(repro_max, repro);
     }
-    if ((!at_top && z > kFlag * strict && lv > kFlag / 2.0 * strict) || repeats_not) {
+    if ((!at_top && z[t] > kFlag * strict && lv > kFlag / 2.0 * strict) || repeats_not) {
       flagged[t] = 1;
       ++count;
     }
