@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
 """Test files for `scpkit diagnose` from a generator independent of the project's rig.
 
-Usage: scripts/independent_cases.py OUT_DIR N [FIRST [SIDE-EFFECT]] [--once-per-hold]   (N
-files per effect and side, seeds FIRST..FIRST+N-1; file names SIDE-EFFECT-I.csv carry the truth;
-SIDE-EFFECT, e.g. load-none, makes that kind only, with the same seeds; --once-per-hold reads
-voltage creep once per hold instead of three times, all else alike). Then
+Usage: scripts/independent_cases.py OUT_DIR N [FIRST [SIDE-EFFECT]] [--once-per-hold]
+[--ar-noise RHO]   (N files per effect and side, seeds FIRST..FIRST+N-1; file names
+SIDE-EFFECT-I.csv carry the truth; SIDE-EFFECT, e.g. load-none, makes that kind only, with the
+same seeds; --once-per-hold reads voltage creep once per hold instead of three times;
+--ar-noise RHO makes the sensor noise AR(1) with lag-one correlation RHO; all else alike). Then
 scripts/independent_run.sh OUT_DIR prints one line per file: name, truth, named cause.
 
 Written apart from lib/src/rig (plain Python, no numpy): a relay-grid Preisach truth with a
@@ -37,6 +38,15 @@ class Preisach:
 
 def density(spread, centre, width):
     return lambda a, b: math.exp(-((a - b) / spread) ** 2) * math.exp(-(((a + b) / 2 - centre) / width) ** 2) + 0.15
+
+class Sensor:
+    """Sensor noise: white, or AR(1) with lag-one correlation AR_RHO (--ar-noise RHO), the same
+    standard deviation; at 0 the draws are exactly those of white noise."""
+    def __init__(self):
+        self.e = 0.0
+    def read(self, rng, sd):
+        self.e = AR_RHO * self.e + math.sqrt(1.0 - AR_RHO * AR_RHO) * rng.gauss(0, sd)
+        return self.e
 
 def quant(v, q):
     return round(v / q) * q if q > 0 else v
@@ -132,8 +142,9 @@ def make_load(rng, effect, mag, out):
         f.write("# specimen: thread\n# length_mm: 100\n# plies: 2\n")
         f.write(f"# gen: {effect} {mag} kind {kind} noise {noise} q {q} per_hold {per_hold} tau {tau:.0f} dwell {dwell}\n")
         f.write("time_s,dwell_s,load_g,disp_mm\n")
+        sensor = Sensor()
         for tt, dw, u, y in rows:
-            f.write(f"{tt:.1f},{dw:.1f},{u:.3f},{quant(y + rng.gauss(0, noise), q):.4f}\n")
+            f.write(f"{tt:.1f},{dw:.1f},{u:.3f},{quant(y + sensor.read(rng, noise), q):.4f}\n")
 
 def make_voltage(rng, effect, mag, out):
     loads = rng.choice([[30, 40, 50, 60, 70, 80, 90, 100], [25, 40, 55, 70, 85, 100], [30, 45, 60, 75, 90, 105, 120]])
@@ -187,8 +198,9 @@ def make_voltage(rng, effect, mag, out):
         f.write(f"# specimen: scp\n# length_mm: {L}\n")
         f.write(f"# gen: {effect} {mag} loads {loads} noise {noise} q {q} tau {tau:.0f} dwell {dwell}\n")
         f.write("time_s,dwell_s,segment,load_g,voltage_V,disp_mm\n")
+        sensor = Sensor()
         for tt, dw, s, Fg, v, y in rows:
-            f.write(f"{tt:.1f},{dw:.1f},{s},{Fg},{v:.4f},{quant(y + rng.gauss(0, noise), q):.4f}\n")
+            f.write(f"{tt:.1f},{dw:.1f},{s},{Fg},{v:.4f},{quant(y + sensor.read(rng, noise), q):.4f}\n")
 
 MAGS = {
     "none": [0], "drift": [0.03, 0.06, 0.12], "outliers": [0.05, 0.1, 0.2],
@@ -197,9 +209,15 @@ MAGS = {
     "offset_nonlinearity": [0.05, 0.1, 0.2],
 }
 ONCE_PER_HOLD = False  # --once-per-hold: voltage creep read once per hold (no readings during holds)
+AR_RHO = 0.0  # --ar-noise RHO: AR(1) sensor noise (clean records with it should stay `none`)
 if __name__ == "__main__":
-    args = [a for a in sys.argv[1:] if a != "--once-per-hold"]
-    ONCE_PER_HOLD = len(args) < len(sys.argv) - 1
+    args = sys.argv[1:]
+    if "--ar-noise" in args:
+        k = args.index("--ar-noise")
+        AR_RHO = float(args[k + 1])
+        del args[k:k + 2]
+    ONCE_PER_HOLD = "--once-per-hold" in args
+    args = [a for a in args if a != "--once-per-hold"]
     outdir, n = args[0], int(args[1])
     first = int(args[2]) if len(args) > 2 else 0
     only = args[3] if len(args) > 3 else None
