@@ -153,7 +153,7 @@ bool testable(const Regression& r, Eigen::Index j) {
 }
 
 // Coefficient tests of a fitted regression with `m` columns.
-std::vector<Signature> coefficient_tests(const Regression& r, Eigen::Index m, bool one_sided) {
+std::vector<Signature> coefficient_tests(const Regression& r, Eigen::Index m) {
   std::vector<Signature> out(static_cast<std::size_t>(m));
   for (Eigen::Index j = 0; r.ok && j < m; ++j) {
     if (!testable(r, j)) continue;
@@ -162,15 +162,15 @@ std::vector<Signature> coefficient_tests(const Regression& r, Eigen::Index m, bo
     s.units = static_cast<int>(r.n);
     s.estimate = r.beta[j];
     s.z = r.beta[j] / std::sqrt(r.cov(j, j));
-    s.p_value = one_sided ? normal_upper(s.z) : normal_two_sided(s.z);
+    s.p_value = normal_two_sided(s.z);
   }
   return out;
 }
 
 // Coefficient tests of d ~ X.
-std::vector<Signature> regress(const Eigen::MatrixXd& X, const Eigen::VectorXd& d, double var_floor,
-                               bool one_sided) {
-  return coefficient_tests(least_squares(X, d, var_floor), X.cols(), one_sided);
+std::vector<Signature> regress(const Eigen::MatrixXd& X, const Eigen::VectorXd& d,
+                               double var_floor) {
+  return coefficient_tests(least_squares(X, d, var_floor), X.cols());
 }
 
 }  // namespace
@@ -220,7 +220,7 @@ ReturnPointSignatures return_point_signatures(const Record& rec, double sigma) {
   }
   const double var_floor = 2.0 * sigma * sigma;
   const Regression r = least_squares(X, y, var_floor);
-  const std::vector<Signature> s = coefficient_tests(r, X.cols(), false);
+  const std::vector<Signature> s = coefficient_tests(r, X.cols());
   const std::string what_rm = out.running_max.what, what_t = out.time.what;
   out.time = s[static_cast<std::size_t>(m)];
   out.time.what = what_t;
@@ -435,10 +435,10 @@ Signature hold_signature(const Record& rec, double sigma) {
     X(k, 1) = dt[i] / dt_max;  // a drift moves held readings whatever the step's direction
     y[k] = m[i];
   }
-  Signature r = regress(X, y, 2.0 * sigma * sigma, true)[0];
+  Signature r = regress(X, y, 2.0 * sigma * sigma)[0];
   if (!r.available) return out;
   r.what = out.what;
-  // One-sided (coefficient_tests): creep continues the step.
+  r.p_value = normal_upper(r.z);  // one-sided: creep continues the step
   return r;
 }
 
