@@ -37,7 +37,10 @@
 #   and 0.005 mm noise (1126), whose readings at equal protocol points are equal but for one
 #   step now and then, which the scale's floor of half a step keeps from counting (`none`);
 # - a moving Preisach of seed 1403 (loops 0.088 mm apart at 0.005 mm noise), congruency p 1e-4
-#   and spike-robust p 0.0017, named `none` while the robust reading had to pass alpha / 10.
+#   and spike-robust p 0.0017, named `none` while the robust reading had to pass alpha / 10;
+# - a 10 % voltage lonely stroke of seed 1703 (8 loads), named `outliers` while the record's
+#   first reading was screened against its one neighbour (4.0 robust sigmas off it, 6.2 off its
+#   protocol point: the running-maximum term's slope), over the term gaining 92 %.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -60,6 +63,7 @@ python3 "$src/scripts/independent_cases.py" "$work/fresh" 1 7027 load-outliers |
 python3 "$src/scripts/independent_cases.py" "$work/clean" 1 1126 load-none || exit 1
 python3 "$src/scripts/independent_cases.py" "$work/fresh" 1 1403 load-minor_loop_noncongruence ||
   exit 1
+python3 "$src/scripts/independent_cases.py" "$work/fresh" 1 1703 voltage-lonely_stroke || exit 1
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -85,5 +89,6 @@ expect "$work/fresh/voltage-creep-3107.csv" creep
 expect "$work/fresh/load-outliers-7002.csv" outliers
 expect "$work/fresh/load-outliers-7027.csv" outliers
 expect "$work/fresh/load-minor_loop_noncongruence-1403.csv" minor_loop_noncongruence
+expect "$work/fresh/voltage-lonely_stroke-1703.csv" lonely_stroke
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]
