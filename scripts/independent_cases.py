@@ -2,10 +2,12 @@
 """Test files for `scpkit diagnose` from a generator independent of the project's rig.
 
 Usage: scripts/independent_cases.py OUT_DIR N [FIRST [SIDE-EFFECT]] [--once-per-hold]
-[--ar-noise RHO]   (N files per effect and side, seeds FIRST..FIRST+N-1; file names
+[--ar-noise RHO] [--one-load]   (N files per effect and side, seeds FIRST..FIRST+N-1; file names
 SIDE-EFFECT-I.csv carry the truth; SIDE-EFFECT, e.g. load-none, makes that kind only, with the
 same seeds; --once-per-hold reads voltage creep once per hold instead of three times;
---ar-noise RHO makes the sensor noise AR(1) with lag-one correlation RHO; all else alike). Then
+--ar-noise RHO makes the sensor noise AR(1) with lag-one correlation RHO; --one-load tests
+voltage at the first of the drawn loads only, one segment, without the two effects that need
+several loads; all else alike). Then
 scripts/independent_run.sh OUT_DIR prints one line per file: name, truth, named cause.
 
 Written apart from lib/src/rig (plain Python, no numpy): a relay-grid Preisach truth with a
@@ -150,6 +152,8 @@ def make_voltage(rng, effect, mag, out):
     loads = rng.choice([[30, 40, 50, 60, 70, 80, 90, 100], [25, 40, 55, 70, 85, 100], [30, 45, 60, 75, 90, 105, 120]])
     if rng.random() < 0.5:
         loads = loads[:]; rng.shuffle(loads)
+    if ONE_LOAD:
+        loads = loads[:1]
     vmax = rng.choice([6.0, 8.0, 10.0])
     steps = rng.choice([6, 8, 10])
     P = Preisach(0.0, vmax * 1.001, 24, density(vmax * rng.uniform(0.1, 0.3), vmax * rng.uniform(0.5, 0.7), vmax * 0.4))
@@ -171,7 +175,7 @@ def make_voltage(rng, effect, mag, out):
     hold = Hold(effect, mag, tau, 0.06 * L, len(loads) * len(seq) * dwell)
     for s, Fg in enumerate(loads):
         F = Fg * 9.81e-3
-        x = (Fg - Fmin) / (Fmax - Fmin)
+        x = (Fg - Fmin) / (Fmax - Fmin) if Fmax > Fmin else 0.5
         f1 = L * (0.02 + 0.05 * x - 0.01 * x * x)  # elongation under load (mm)
         if effect == "offset_nonlinearity":
             f1 -= mag * L * 0.05 * math.exp(-(Fg - Fmin) / ((Fmax - Fmin) * 0.12))
@@ -210,6 +214,7 @@ MAGS = {
 }
 ONCE_PER_HOLD = False  # --once-per-hold: voltage creep read once per hold (no readings during holds)
 AR_RHO = 0.0  # --ar-noise RHO: AR(1) sensor noise (clean records with it should stay `none`)
+ONE_LOAD = False  # --one-load: voltage tests at the first of the drawn loads only (one segment)
 if __name__ == "__main__":
     args = sys.argv[1:]
     if "--ar-noise" in args:
@@ -217,7 +222,8 @@ if __name__ == "__main__":
         AR_RHO = float(args[k + 1])
         del args[k:k + 2]
     ONCE_PER_HOLD = "--once-per-hold" in args
-    args = [a for a in args if a != "--once-per-hold"]
+    ONE_LOAD = "--one-load" in args
+    args = [a for a in args if a not in ("--once-per-hold", "--one-load")]
     outdir, n = args[0], int(args[1])
     first = int(args[2]) if len(args) > 2 else 0
     only = args[3] if len(args) > 3 else None
@@ -230,6 +236,8 @@ if __name__ == "__main__":
     for side, effects in kinds:
         for e in effects:
             if only is not None and only != f"{side}-{e}":
+                continue
+            if ONE_LOAD and e in ("load_shape_coupling", "offset_nonlinearity"):
                 continue
             for i in range(first, first + n):
                 rng = random.Random(i * 7919 + len(e) * 31 + (0 if side == "load" else 100000))

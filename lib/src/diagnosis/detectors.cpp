@@ -7,6 +7,7 @@
 #include <cmath>
 #include <numeric>
 #include <set>
+#include <utility>
 
 #include "scpkit/error.hpp"
 #include "scpkit/hysteresis/preisach.hpp"
@@ -235,6 +236,7 @@ Finding feature_finding(Context& ctx, const std::string& effect, const std::stri
     }
   }
   const Score s = score(ctx, after);
+  f.heldout_prediction = std::move(after);
   record(f, ctx, s, std::max(p_signature, s.p_value));
   f.detected = p_signature < ctx.opt.alpha && s.p_value < ctx.opt.gain_alpha &&
                f.gain_pct >= ctx.opt.min_gain_pct;
@@ -261,6 +263,7 @@ Finding model_finding(Context& ctx, const std::string& effect, const std::string
     }
   }
   const Score s = score(ctx, after);
+  f.heldout_prediction = std::move(after);
   record(f, ctx, s, s.p_value);
   f.score = f.gain_pct;
   f.evidence = fmt::format(
