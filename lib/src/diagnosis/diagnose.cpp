@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <utility>
 
 #include "baseline.hpp"
 #include "detectors.hpp"
@@ -50,15 +49,18 @@ double sustained_rms_pct(const diagnosis::Context& ctx) {
   return 100.0 * std::sqrt(ss / static_cast<double>(std::max<std::size_t>(keep, 1))) /
          ctx.rec.range;
 }
-/// The held-out gains of two findings, on one record driven from rest (one segment, not a
-/// load test) without the folds that hold its first rise (until the input first reaches its
-/// maximum); elsewhere their gains as reported.
-std::pair<double, double> first_rise_aside(diagnosis::Context& ctx, const Finding& a,
-                                           const Finding& b) {
+
+/// Whether creep gains kCreepOverLonely times what the lonely stroke's term gains. On one
+/// record driven from rest (one segment, not a load test) the gains are taken without the folds
+/// that hold its first rise (until the input first reaches its maximum): that fold, held out,
+/// trains no running-maximum term, while a Kelvin element fitted on the other folds offsets the
+/// first rise too.
+bool creep_outgains_lonely(diagnosis::Context& ctx, const Finding& creep, const Finding& lonely) {
+  const auto outgains = [](double a, double b) { return a > kCreepOverLonely * b; };
   const diagnosis::Record& rec = ctx.rec;
   if (rec.several_loads || rec.input_is_load || rec.seg_first.size() != 1 ||
-      a.heldout_prediction.empty() || b.heldout_prediction.empty())
-    return {a.gain_pct, b.gain_pct};
+      creep.heldout_prediction.empty() || lonely.heldout_prediction.empty())
+    return outgains(creep.gain_pct, lonely.gain_pct);
   const std::size_t top =
       static_cast<std::size_t>(std::max_element(rec.u.begin(), rec.u.end()) - rec.u.begin());
   std::vector<char> first(static_cast<std::size_t>(rec.folds), 0);
@@ -68,12 +70,12 @@ std::pair<double, double> first_rise_aside(diagnosis::Context& ctx, const Findin
   std::vector<char> use(rec.size(), 0);
   std::size_t count = 0;
   for (std::size_t t : ctx.scored) {
-    use[t] = first[static_cast<std::size_t>(rec.fold[t])] ? 0 : 1;
+    use[t] = !first[static_cast<std::size_t>(rec.fold[t])];
     count += use[t];
   }
-  if (count < 20) return {a.gain_pct, b.gain_pct};
-  return {diagnosis::score(ctx, a.heldout_prediction, use).gain_pct,
-          diagnosis::score(ctx, b.heldout_prediction, use).gain_pct};
+  if (count < 20) return outgains(creep.gain_pct, lonely.gain_pct);
+  return outgains(diagnosis::score(ctx, creep.heldout_prediction, use).gain_pct,
+                  diagnosis::score(ctx, lonely.heldout_prediction, use).gain_pct);
 }
 }  // namespace
 
@@ -141,15 +143,10 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   // records of a lonely stroke (creep also detected in 46), creep gained at most 1.15 times what
   // the running-maximum term gained (4 named creep before this margin); on 5 creep records read
   // once per hold where the lonely stroke was seen too, 1.45 to 2.2 times.
-  // On one record driven from rest the first rise is the only one, and its fold, held out,
-  // trains no running-maximum term, while a Kelvin element fitted on the other folds offsets it
-  // X
-  if (!best && lonely_seen && creep) {
-    const auto [creep_gain, lonely_gain] = first_rise_aside(ctx, *creep, *lonely);
-    if (!(creep_gain > kCreepOverLonely * lonely_gain)) best = lonely;
-  } else if (!best && lonely_seen) {
+  // On one record driven from rest the gains are compared without the first rise's folds
+  // (creep_outgains_lonely).
+  if (!best && lonely_seen && !(creep && creep_outgains_lonely(ctx, *creep, *lonely)))
     best = lonely;
-  }
   // Likewise a drift whose return-point time signature is significant is named ahead of a
   // lonely stroke whose own return-point offset is not: a trend within each segment gives the
   // running-maximum term a gain (measured: a fresh independent-generator record, drift of 12 %,
