@@ -1,6 +1,7 @@
 #pragma once
 // Private to diagnose: what every detector shares (the record, the baseline refitted without
-// each fold, its out-of-fold residuals, the noise floor) and one function per named effect.
+// each fold, its out-of-fold residuals, the noise floor; context.cpp) and one function per
+// named effect.
 #include <Eigen/Core>
 #include <functional>
 #include <random>
@@ -60,6 +61,22 @@ Finding model_finding(Context& ctx, const std::string& effect, const std::string
                       const std::string& what);
 
 Finding not_tested(const Context& ctx, const std::string& effect, const std::string& why);
+
+/// Squared error of a prediction on the training rows (how extensions choose their parameters).
+double training_sse(const std::vector<double>& y, const std::vector<double>& p,
+                    const std::vector<char>& train);
+
+/// Each row's segment load, normalised: (F - F_mid) / (F range).
+std::vector<double> centred_load(const Record& rec);
+
+/// Subtracts each column's mean within each load segment.
+void centre_per_segment(const Record& rec, Eigen::MatrixXd& X);
+
+/// A model-free signature's verdict in words.
+std::string describe(const Signature& s);
+
+// One function per named effect, each in its own file (drift.cpp, creep.cpp, lonely_stroke.cpp,
+// load_maps.cpp, noncongruence.cpp, outliers.cpp).
 
 Finding detect_drift(Context& ctx);
 Finding detect_creep(Context& ctx);

@@ -1,0 +1,256 @@
+// creep: the response lags its rate-independent value (Kelvin elements, PHYSICS.md section 5).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "detectors.hpp"
+#include "stats.hpp"
+
+namespace scpkit::diagnosis {
+
+namespace {
+
+// Kelvin elements for creep (PHYSICS.md section 5): time constants in holds, and the lag
+// p - v of an element v relaxing towards p with time constant tau, dt[t] the time since the
+// previous reading (restarted at each segment).
+constexpr double kKelvinHolds[] = {0.3, 1.0, 3.0};
+
+void kelvin_lag(const Record& rec, const std::vector<double>& p, const std::vector<double>& dt,
+                double tau, std::vector<double>& lag) {
+  lag.resize(rec.size());
+  double v = 0.0;
+  for (std::size_t t = 0; t < rec.size(); ++t) {
+    const bool start = t == 0 || rec.seg[t] != rec.seg[t - 1];
+    v = start ? p[t] : p[t] + (v - p[t]) * std::exp(-dt[t] / tau);
+    lag[t] = p[t] - v;
+  }
+}
+
+// Time since the previous reading (0 where the clock does not advance).
+std::vector<double> reading_intervals(const Record& rec) {
+  std::vector<double> dt(rec.size(), 0.0);
+  for (std::size_t t = 1; t < rec.size(); ++t) dt[t] = std::max(rec.time[t] - rec.time[t - 1], 0.0);
+  return dt;
+}
+
+// Permutations of the hold-time test: ten times the other tests', since where it names creep
+// alone it must reach alpha / 10 (diagnose.cpp).
+int dwell_permutations(const DiagnoseOptions& opt) { return 10 * opt.permutations; }
+
+// With one reading per hold, holds of different lengths are an experiment: the response lags
+// each step by a part that decays with the time held, so the residuals of a rate-independent
+// baseline follow the hold times; without creep they cannot, whatever the baseline misfits
+// (the memory path is the same for any hold times). Statistic: the residuals' projection on
+// the lag of a Kelvin element (tau = 0.3, 1, 3 holds) behind the out-of-fold prediction, the
+// largest of the three; null: the same with the holds' durations permuted among the readings.
+// One-sided (creep holds the response back).
+Signature dwell_signature(Context& ctx, double hold) {
+  const Record& rec = ctx.rec;
+  const std::size_t n = rec.size();
+  Signature s;
+  s.what = "residuals along the lag behind each step, in the readings' own hold times";
+  std::vector<double> p(rec.y);
+  for (std::size_t t : ctx.scored) p[t] = ctx.oof[t];
+  // Rows whose time since the previous reading is a hold (elsewhere the lag restarts or the
+  // interval is 0, and a permuted hold would change nothing or mean nothing).
+  const std::vector<double> dt = reading_intervals(rec);
+  std::vector<std::size_t> movable;
+  for (std::size_t t = 1; t < n; ++t) {
+    if (rec.seg[t] == rec.seg[t - 1] && dt[t] > 0.0) movable.push_back(t);
+  }
+  double lo = HUGE_VAL, hi = 0.0;
+  for (std::size_t t : movable) {
+    lo = std::min(lo, dt[t]);
+    hi = std::max(hi, dt[t]);
+  }
+  if (movable.size() < 20 || !(hi > 1.05 * lo)) return s;  // the holds do not vary
+  s.available = true;
+  s.units = static_cast<int>(movable.size());
+  std::vector<double> lag;
+  auto statistic = [&](const std::vector<double>& d, double* estimate) {
+    double best = -HUGE_VAL;
+    for (double holds : kKelvinHolds) {
+      kelvin_lag(rec, p, d, holds * hold, lag);
+      double rl = 0.0, ll = 0.0;
+      for (std::size_t t : ctx.scored) {
+        rl -= ctx.r[t] * lag[t];
+        ll += lag[t] * lag[t];
+      }
+      if (!(ll > 0.0)) continue;
+      const double z = rl / std::sqrt(ll);
+      if (z > best) {
+        best = z;
+        if (estimate) *estimate = rl / ll;
+      }
+    }
+    return best;
+  };
+  const double observed = statistic(dt, &s.estimate);
+  std::vector<double> shuffled(dt);
+  std::vector<double> pool;
+  for (std::size_t t : movable) pool.push_back(dt[t]);
+  // Its own stream: the other tests' draws stay as they were.
+  const int permutations = dwell_permutations(ctx.opt);
+  int above = 0;
+  std::mt19937_64 rng(ctx.opt.seed + 7);
+  double sum = 0.0, sum2 = 0.0;
+  for (int b = 0; b < permutations; ++b) {
+    std::shuffle(pool.begin(), pool.end(), rng);
+    for (std::size_t i = 0; i < movable.size(); ++i) shuffled[movable[i]] = pool[i];
+    const double x = statistic(shuffled, nullptr);
+    if (x >= observed) ++above;
+    sum += x;
+    sum2 += x * x;
+  }
+  s.p_value = (1.0 + above) / (1.0 + permutations);
+  // z against the permutation distribution's mean and spread (reported, not tested)
+  const double mean = sum / permutations, var = sum2 / permutations - mean * mean;
+  s.z = var > 0.0 ? (observed - mean) / std::sqrt(var) : 0.0;
+  return s;
+}
+
+// Prony series driven by the model (PHYSICS.md section 5): for each time constant tau_k a
+// Kelvin element v_k relaxing towards the rate-independent prediction p; the feature is the
+// part not yet reached, p - v_k (restarted at each segment). Weights by least squares on
+// each fold's training rows; tau_k = 0.3, 1 and 3 holds.
+Finding prony_creep(Context& ctx, double hold) {
+  const Record& rec = ctx.rec;
+  return feature_finding(
+      ctx, "creep", "baseline + Prony series (Kelvin elements, tau = 0.3, 1, 3 holds)",
+      [&](const FoldFit& fit) {
+        const std::vector<double> dt = reading_intervals(rec);
+        Eigen::MatrixXd X(static_cast<Eigen::Index>(rec.size()), 3);
+        std::vector<double> lag;
+        for (Eigen::Index k = 0; k < 3; ++k) {
+          kelvin_lag(rec, fit.pred, dt, kKelvinHolds[k] * hold, lag);
+          X.col(k) = Eigen::Map<const Eigen::VectorXd>(lag.data(), X.rows());
+        }
+        return X;
+      },
+      "the lag of the response behind its rate-independent value (Kelvin elements)");
+}
+
+// Creep without readings during holds: the model seen through a Kelvin element in the
+// readings' own time (the lag behind each step, and how it changes with the hold times).
+Finding kelvin_creep(Context& ctx) {
+  const Record& rec = ctx.rec;
+  std::vector<double> dt;
+  for (std::size_t t = 1; t < rec.size(); ++t) {
+    if (rec.time[t] > rec.time[t - 1]) dt.push_back(rec.time[t] - rec.time[t - 1]);
+  }
+  if (dt.empty()) return not_tested(ctx, "creep", "the readings carry no time");
+  const double step = median(dt);
+  // Kelvin element in the readings' own time: y = (1 - c) Gamma + c v, v relaxing towards
+  // Gamma with time constant tau (restarted at each segment). The model is fitted through the
+  // filter (weights stay linear); c and tau chosen on each fold's training rows.
+  struct Kelvin {
+    double c, tau;
+  };
+  // c = 0 is the baseline itself: without it every fold is forced to creep, and clean data
+  // lose on held-out cycles what the forced lag costs (measured: -2 to -84 % on clean rig data).
+  std::vector<Kelvin> candidates{{0.0, step}};
+  for (double c : {0.1, 0.2, 0.4}) {
+    for (double tau : {0.5, 1.0, 2.0, 5.0, 10.0}) candidates.push_back({c, tau * step});
+  }
+  auto filter_for = [&rec](Kelvin k) {
+    return [&rec, k](Eigen::Ref<Eigen::VectorXd> p) {
+      double v = 0.0;
+      for (Eigen::Index t = 0; t < p.size(); ++t) {
+        const auto i = static_cast<std::size_t>(t);
+        const bool start = i == 0 || rec.seg[i] != rec.seg[i - 1];
+        const double decay =
+            start ? 0.0 : std::exp(-std::max(rec.time[i] - rec.time[i - 1], 0.0) / k.tau);
+        v = start ? p[t] : p[t] + (v - p[t]) * decay;
+        p[t] = (1.0 - k.c) * p[t] + k.c * v;
+      }
+    };
+  };
+  std::string chosen;
+  int creeping_folds = 0;  // folds whose training rows chose a creep fraction c > 0
+  Finding f = model_finding(
+      ctx, "creep", "baseline through a Kelvin element (creep fraction c, time constant tau)",
+      [&](int k) {
+        const std::vector<char> train = ctx.train_mask(k);
+        std::vector<double> best_p = ctx.by_fold[static_cast<std::size_t>(k)].pred;
+        double best = std::numeric_limits<double>::infinity();
+        Kelvin best_k{0.0, 0.0};
+        for (const Kelvin& kv : candidates) {  // chosen on one grid, then refitted
+          const std::vector<double> p = ctx.base.fit(train, {filter_for(kv), nullptr, true}).pred;
+          double ss = 0.0;
+          for (std::size_t t = 0; t < rec.size(); ++t) {
+            if (train[t]) ss += (rec.y[t] - p[t]) * (rec.y[t] - p[t]);
+          }
+          if (ss < best) {
+            best = ss;
+            best_k = kv;
+          }
+        }
+        if (best_k.c > 0.0) ++creeping_folds;
+        best_p = best_k.c > 0.0 ? ctx.base.fit(train, {filter_for(best_k), nullptr, false}).pred
+                                : ctx.by_fold[static_cast<std::size_t>(k)].pred;
+        chosen +=
+            fmt::format("{}c {:g}, tau {:.3g} s", chosen.empty() ? "" : "; ", best_k.c, best_k.tau);
+        return best_p;
+      },
+      "the response lags its rate-independent value with the readings' own timing");
+  f.extended_model += " (per fold: " + chosen + ")";
+  // Known by its gain, creep must also be what most folds' training rows chose: a gain carried
+  // by a minority of folds is a misfit some folds happen to absorb with a lag (measured: a
+  // clean damped record of an independent generator, 59 readings scored, c > 0 in 2 of 6
+  // folds, gain 8.6 % at p = 0.006, named `creep`). On the rig's 48 creep records (24 per
+  // side) every fold chose c > 0 wherever the Kelvin element was detected; on its clean
+  // records folds choose c > 0 now and then (up to 6 of 7), so this is a guard, not evidence.
+  if (f.detected && 2 * creeping_folds <= rec.folds) {
+    f.detected = false;
+    f.evidence += fmt::format("; only {} of {} folds chose a creep fraction above 0",
+                              creeping_folds, rec.folds);
+  }
+  ctx.dwell = dwell_signature(ctx, step);
+  // Where the residuals follow the hold times, the lag itself as a feature too (the Prony
+  // series on the baseline's prediction, as with readings during holds): the Kelvin grid's
+  // smallest fraction, 0.1, lost 3 % on a rig record of 0.1 whose signature had p = 0.001.
+  // The one gaining more on held-out data is kept.
+  if (ctx.dwell.available && ctx.dwell.p_value < ctx.opt.alpha) {
+    Finding g = prony_creep(ctx, step);
+    if (g.gain_pct > f.gain_pct) f = g;
+  }
+  if (ctx.dwell.available) {
+    f.evidence += fmt::format(
+        "; the {} (projection {:.3g} of the lag, p = {:.2g} against the {} hold times "
+        "permuted {} times)",
+        ctx.dwell.what, ctx.dwell.estimate, ctx.dwell.p_value, ctx.dwell.units,
+        dwell_permutations(ctx.opt));
+    // Intersection-union, as for the other signatures: the dependence on the hold times
+    // significant, and the Kelvin element gaining at gain_alpha.
+    if (ctx.dwell.p_value < ctx.opt.alpha && f.p_value < ctx.opt.gain_alpha && f.gain_pct > 0.0)
+      f.detected = true;
+  }
+  return f;
+}
+
+}  // namespace
+
+Finding detect_creep(Context& ctx) {
+  if (!ctx.holds.available) return kelvin_creep(ctx);
+  const Record& rec = ctx.rec;
+  // The time an input is held: the median time between input changes.
+  std::vector<double> holds;
+  double since = rec.time.front();
+  for (std::size_t t = 1; t < rec.size(); ++t) {
+    if (rec.u[t] != rec.u[t - 1]) {
+      if (rec.time[t] > since) holds.push_back(rec.time[t] - since);
+      since = rec.time[t];
+    }
+  }
+  if (holds.empty()) return not_tested(ctx, "creep", "the readings carry no time");
+  const double hold = median(holds);
+  Finding f = prony_creep(ctx, hold);
+  // Readings during holds answer directly: they move on in the step's direction or not.
+  if (!ctx.holds.available) return f;
+  f.evidence += "; " + describe(ctx.holds);
+  f.detected = ctx.holds.p_value < ctx.opt.alpha && f.gain_pct > 0.0;
+  return f;
+}
+
+}  // namespace scpkit::diagnosis

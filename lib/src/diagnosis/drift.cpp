@@ -1,0 +1,113 @@
+// drift: a slow trend in time, independent of the input (PHYSICS.md section 5).
+#include <fmt/format.h>
+
+#include <Eigen/QR>
+#include <algorithm>
+
+#include "detectors.hpp"
+
+namespace scpkit::diagnosis {
+
+namespace {
+
+// Each segment's mean reading time (s).
+std::vector<double> segment_mean_times(const Record& rec) {
+  std::vector<double> mean(rec.seg_first.size(), 0.0);
+  for (std::size_t s = 0; s < mean.size(); ++s) {
+    for (std::size_t t = rec.seg_first[s]; t < rec.seg_first[s] + rec.seg_count[s]; ++t)
+      mean[s] += rec.time[t];
+    mean[s] /= static_cast<double>(rec.seg_count[s]);
+  }
+  return mean;
+}
+
+// Drift on tests at several loads: the per-segment offsets the baseline frees absorb a drift on
+// the training segments, so a trend fitted to training residuals sees nothing. The drift lives
+// in the offset map instead: a_s = f1(F_s) + beta t_s (t_s the segment's mean time), through
+// which the held-out segments are predicted; separable from f1 when the loads were not tested
+// in the order of their size.
+Finding drift_in_offset_map(Context& ctx) {
+  const Record& rec = ctx.rec;
+  const auto [flo, fhi] = std::minmax_element(rec.seg_load.begin(), rec.seg_load.end());
+  const double f_lo = *flo, f_scale = std::max(*fhi - *flo, 1e-300);
+  const double t0 = rec.time.front(), t1 = std::max(rec.time.back(), t0 + 1e-300);
+  std::vector<double> seg_time = segment_mean_times(rec);
+  for (double& t : seg_time) t = (t - t0) / (t1 - t0);
+  std::string betas;
+  Finding f = model_finding(
+      ctx, "drift", "augmented baseline with offset map f1(F) + beta t (linear drift in time)",
+      [&](int k) {
+        const FoldFit& fit = ctx.by_fold[static_cast<std::size_t>(k)];
+        std::vector<std::size_t> train;
+        for (std::size_t s = 0; s < rec.seg_first.size(); ++s) {
+          if (fit.free[s]) train.push_back(s);
+        }
+        const auto m = static_cast<Eigen::Index>(train.size());
+        if (m < 5) return fit.pred;  // a quadratic and a trend need five offsets
+        Eigen::MatrixXd A(m, 4);
+        Eigen::VectorXd a(m);
+        std::vector<double> F, B, Aoff;
+        for (Eigen::Index i = 0; i < m; ++i) {
+          const std::size_t s = train[static_cast<std::size_t>(i)];
+          const double x = (rec.seg_load[s] - f_lo) / f_scale;
+          A.row(i) << 1.0, x, x * x, seg_time[s];
+          a[i] = fit.a[s];
+          F.push_back(rec.seg_load[s]);
+          Aoff.push_back(fit.a[s]);
+          B.push_back(fit.b[s]);
+        }
+        const Eigen::VectorXd c = A.colPivHouseholderQr().solve(a);
+        betas += fmt::format("{}{:.3g}", betas.empty() ? "" : ", ", c[3]);
+        const MapFit maps = fit_maps(F, Aoff, B, 0.0, f_lo, f_scale);
+        std::vector<double> p(fit.pred);
+        for (std::size_t t = 0; t < rec.size(); ++t) {
+          const auto s = static_cast<std::size_t>(rec.seg[t]);
+          if (fit.free[s]) continue;
+          const double x = (rec.seg_load[s] - f_lo) / f_scale;
+          const double off = c[0] + c[1] * x + c[2] * x * x + c[3] * (rec.time[t] - t0) / (t1 - t0);
+          p[t] = off + maps.eval(maps.coef_b, rec.seg_load[s]) * fit.h[t];
+        }
+        return p;
+      },
+      "offsets that follow the time of each load segment as well as its load");
+  f.extended_model += " (beta per fold: " + betas + ")";
+  return f;
+}
+
+}  // namespace
+
+Finding detect_drift(Context& ctx) {
+  const Record& rec = ctx.rec;
+  const double t0 = rec.time.front(), t1 = std::max(rec.time.back(), t0 + 1e-300);
+  // Load tests: one trend over the record. Tests held out by load segment: the drift lives in
+  // the offset map, and when the loads were tested in the order of their size the map's trend
+  // is a function of the load, which f1 absorbs; the drift inside each segment remains (a trend
+  // about the segment's mean time, one slope for all). The one that gains more is reported.
+  const bool by_segment = rec.several_loads && rec.fold_kind == "load segments";
+  Finding map;
+  if (by_segment) map = drift_in_offset_map(ctx);
+  std::vector<double> origin(rec.seg_first.size(), t0);  // each segment's time origin
+  if (by_segment) origin = segment_mean_times(rec);
+  Finding f = feature_finding(
+      ctx, "drift",
+      by_segment ? "augmented baseline + linear trend in time within each load segment"
+                 : "baseline + linear trend in time",
+      [&](const FoldFit&) {
+        Eigen::MatrixXd X(static_cast<Eigen::Index>(rec.size()), 1);
+        for (std::size_t t = 0; t < rec.size(); ++t)
+          X(static_cast<Eigen::Index>(t), 0) =
+              (rec.time[t] - origin[static_cast<std::size_t>(rec.seg[t])]) / (t1 - t0);
+        return X;
+      },
+      by_segment ? "a trend in time within each load segment" : "a linear trend in time");
+  if (by_segment && !(f.gain_pct > map.gain_pct)) f = map;
+  const Signature& sig = ctx.return_point.time;
+  if (sig.available) {
+    f.evidence += "; " + describe(sig);
+    // Readings in the same state that drift apart with time are a drift whatever the model.
+    if (sig.p_value < ctx.opt.alpha && f.gain_pct > 0.0) f.detected = true;
+  }
+  return f;
+}
+
+}  // namespace scpkit::diagnosis

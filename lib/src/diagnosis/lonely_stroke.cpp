@@ -1,0 +1,166 @@
+// lonely_stroke: the first rise after a load change differs from later cycles (PHYSICS.md section
+// 4).
+#include <fmt/format.h>
+
+#include <algorithm>
+
+#include "detectors.hpp"
+
+namespace scpkit::diagnosis {
+
+Finding detect_lonely_stroke(Context& ctx) {
+  const Record& rec = ctx.rec;
+  const std::size_t n = rec.size();
+  // The running maximum of the input since the last load change (or the start), normalised,
+  // and the sign of its term in two patterns: paper 001's (+1 in the first segment and after a
+  // load decrease, -1 after an increase, its open case) and one sign throughout. Load tests:
+  // one segment, one pattern.
+  const auto [umin, umax] = std::minmax_element(rec.u.begin(), rec.u.end());
+  const double span = std::max(*umax - *umin, 1e-300);
+  std::vector<double> m(n);
+  std::vector<char> after_increase(n, 0);
+  for (std::size_t s = 0; s < rec.seg_first.size(); ++s) {
+    const bool up = rec.several_loads && s > 0 && rec.seg_load[s] > rec.seg_load[s - 1];
+    double M = rec.u[rec.seg_first[s]];
+    for (std::size_t t = rec.seg_first[s]; t < rec.seg_first[s] + rec.seg_count[s]; ++t) {
+      M = std::max(M, rec.u[t]);
+      m[t] = (M - *umin) / span;
+      after_increase[t] = up ? 1 : 0;
+    }
+  }
+  const bool two_patterns =
+      std::any_of(after_increase.begin(), after_increase.end(), [](char c) { return c != 0; });
+  std::vector<double> seg_top(rec.seg_first.size(), 0.0);  // the running maximum's last value
+  for (std::size_t t = 0; t < n; ++t) {
+    const auto s = static_cast<std::size_t>(rec.seg[t]);
+    seg_top[s] = std::max(seg_top[s], m[t]);
+  }
+  struct Term {
+    double lambda = 0.0;
+    bool uniform = false;
+  };
+  auto term = [&](const Term& c, std::size_t t) {
+    return c.lambda * (after_increase[t] && !c.uniform ? -m[t] : m[t]);
+  };
+  // The term scales with each segment's range on voltage tests (f2 times the span of H, whose
+  // units are the input's), with the output range on load tests; its size lambda (and
+  // pattern) is chosen on each fold's training rows.
+  auto scales = [&](const FoldFit& fit) {
+    std::vector<double> out(n, rec.range);
+    if (!rec.several_loads) return out;
+    const auto [hlo, hhi] = std::minmax_element(fit.h.begin(), fit.h.end());
+    for (std::size_t t = 0; t < n; ++t)
+      out[t] = fit.b[static_cast<std::size_t>(rec.seg[t])] * (*hhi - *hlo);
+    return out;
+  };
+  std::string chosen;
+  Finding f = model_finding(
+      ctx, "lonely_stroke",
+      rec.several_loads
+          ? "augmented baseline + running-maximum term re-armed at each load change (paper 001)"
+          : "baseline + running-maximum term (expanded plane, paper 001)",
+      [&](int k) {
+        const std::vector<char> train = ctx.train_mask(k);
+        const FoldFit& base = ctx.by_fold[static_cast<std::size_t>(k)];
+        // Without a training row on a first rise the term is constant on every trained
+        // segment, where the offsets take it up: lambda is not identified and stays 0 (a grid
+        // value chosen on a tie lost 40 % on one record's held-out first rise).
+        bool identified = false;
+        for (std::size_t t = 0; t < n && !identified; ++t)
+          identified = train[t] && m[t] < seg_top[static_cast<std::size_t>(rec.seg[t])];
+        if (!identified) {
+          chosen += fmt::format("{}0 (no first rise trained)", chosen.empty() ? "" : ", ");
+          return base.pred;
+        }
+        const std::vector<double> scale = scales(base);
+        auto shifted = [&](const Term& c) {
+          std::vector<double> y(rec.y);
+          for (std::size_t t = 0; t < n; ++t) y[t] -= scale[t] * term(c, t);
+          return y;
+        };
+        // The pattern from the baseline's training residuals (cheap, two-stage): the term's
+        // coefficient among the segments after an increase against the others'; lambda, then,
+        // by refitting the baseline for each candidate.
+        // Only where both classes have a first rise among the training rows: otherwise the
+        // data cannot tell (after one load change, each fold holds out one of the two first
+        // rises) and paper 001's pattern stands.
+        bool uniform = false;
+        if (two_patterns) {
+          double xr[2] = {0.0, 0.0}, xx[2] = {0.0, 0.0};
+          int rising[2] = {0, 0};
+          for (std::size_t t = 0; t < n; ++t) {
+            if (!train[t]) continue;
+            const double x = scale[t] * m[t];
+            const int c = after_increase[t] ? 1 : 0;
+            xr[c] += x * (rec.y[t] - base.pred[t]);
+            xx[c] += x * x;
+            if (m[t] < seg_top[static_cast<std::size_t>(rec.seg[t])]) ++rising[c];
+          }
+          uniform = rising[0] > 0 && rising[1] > 0 && xr[0] * xr[1] > 0.0;
+        }
+        std::vector<Term> candidates;
+        for (double lambda : {-0.15, -0.08, -0.04, -0.02, 0.0, 0.02, 0.04, 0.08, 0.15})
+          candidates.push_back({lambda, uniform});
+        auto sse = [&](const Term& c) {
+          const std::vector<double> y = shifted(c);
+          const std::vector<double> p =
+              c.lambda == 0.0 ? base.pred : ctx.base.fit(train, {{}, &y, true}).pred;
+          return training_sse(y, p, train);
+        };
+        std::vector<double> ss;
+        std::size_t i_best = 0;
+        for (std::size_t i = 0; i < candidates.size(); ++i) {
+          ss.push_back(sse(candidates[i]));
+          if (ss[i] < ss[i_best] * (1.0 - 1e-9)) i_best = i;
+        }
+        Term best_c = candidates[i_best];
+        // Between grid values: the vertex of the parabola through the best and its two
+        // neighbours (one more fit), where none of the three is lambda = 0 (the baseline's
+        // own fit, on four grids, is not like for like with the one-grid candidates). Measured
+        // on an independent generator's lonely strokes of 0.06: lambda 0.04 or 0.08 per fold
+        // left a Kelvin creep element gaining more than the term.
+        if (i_best > 0 && i_best + 1 < candidates.size() && candidates[i_best - 1].lambda != 0.0 &&
+            candidates[i_best].lambda != 0.0 && candidates[i_best + 1].lambda != 0.0) {
+          const double x0 = candidates[i_best - 1].lambda, x1 = best_c.lambda,
+                       x2 = candidates[i_best + 1].lambda;
+          const double s0 = ss[i_best - 1], s1 = ss[i_best], s2 = ss[i_best + 1];
+          const double den = (x1 - x0) * (s1 - s2) - (x1 - x2) * (s1 - s0);
+          if (den != 0.0) {
+            const double v =
+                x1 -
+                0.5 * ((x1 - x0) * (x1 - x0) * (s1 - s2) - (x1 - x2) * (x1 - x2) * (s1 - s0)) / den;
+            if (v > x0 && v < x2 && v != x1 && sse({v, uniform}) < s1) best_c.lambda = v;
+          }
+        }
+        chosen += fmt::format("{}{:+.3g}{}", chosen.empty() ? "" : ", ", best_c.lambda,
+                              best_c.uniform ? " one sign" : "");
+        if (best_c.lambda == 0.0) return base.pred;
+        const std::vector<double> y = shifted(best_c);
+        const FoldFit fit = ctx.base.fit(train, {{}, &y, false});
+        std::vector<double> p(fit.pred);
+        for (std::size_t t = 0; t < n; ++t) p[t] += scale[t] * term(best_c, t);
+        return p;
+      },
+      "a term in the running maximum of the input since the last load change (first rise "
+      "against later cycles)");
+  f.extended_model += " (lambda per fold: " + chosen + ")";
+  // On a load test a first stroke that differs from later ones is also what any Preisach
+  // plane extending below the lowest tested load gives (the specimen's virgin loading before
+  // the record; PHYSICS.md section 4: the expanded plane), so there the model-free offset is
+  // no evidence. With voltage, power or temperature as the input (at one load or several) the
+  // lowest input (0 V, ambient) resets every hysteron of a plane on the tested inputs: an
+  // offset between readings in the same memory state is the lonely stroke.
+  const Signature& sig = ctx.return_point.running_max;
+  if (sig.available) {
+    f.evidence += "; " + describe(sig);
+    // Intersection-union, as for the other signatures: the offset significant and the term
+    // gaining at least min_gain_pct at gain_alpha (measured: with any gain > 0 a drift record
+    // whose trend extension gained 85 % was named a lonely stroke gaining 0.1 %).
+    if (!rec.input_is_load && sig.p_value < ctx.opt.alpha && f.p_value < ctx.opt.gain_alpha &&
+        f.gain_pct >= ctx.opt.min_gain_pct)
+      f.detected = true;
+  }
+  return f;
+}
+
+}  // namespace scpkit::diagnosis

@@ -1,0 +1,84 @@
+// minor_loop_noncongruence: minor loops between the same extrema differ with their history
+// (PHYSICS.md section 5).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "detectors.hpp"
+
+namespace scpkit::diagnosis {
+
+Finding detect_noncongruence(Context& ctx) {
+  const Record& rec = ctx.rec;
+  const Signature& sig = ctx.congruency;
+  if (!sig.available || rec.several_loads)
+    return not_tested(ctx, "minor_loop_noncongruence",
+                      "needs monotone branches from the same turning value after different "
+                      "histories (minor loops between the same extrema) in one load record, "
+                      "which these data do not hold");
+  // The extension: an output-dependent loop height, y = phi_c(Gamma[u]) with the monotone map
+  // phi_c(w) = w + c w^2 in units of the range (PHYSICS.md section 5, "output-dependent
+  // density"): a loop's height scales with 1 + 2 c w at its level, which no classical Preisach
+  // model does (its loops between the same extrema are congruent) while wiping-out holds.
+  // Identified as a classical model of the measured response mapped back, psi_c(y); c chosen
+  // on each fold's training rows (c = 0 is the baseline).
+  const double y_lo = *std::min_element(rec.y.begin(), rec.y.end()), R = rec.range;
+  auto phi = [&](double c, double w) {
+    const double x = (w - y_lo) / R;
+    return y_lo + R * (x + c * x * x);
+  };
+  auto psi = [&](double c, double y) {
+    const double x = (y - y_lo) / R;
+    return y_lo + R * 2.0 * x / (1.0 + std::sqrt(std::max(1.0 + 4.0 * c * x, 0.0)));
+  };
+  auto predict = [&](const std::vector<char>& train, double c, bool quick) {
+    std::vector<double> w(rec.size());
+    for (std::size_t t = 0; t < rec.size(); ++t) w[t] = psi(c, rec.y[t]);
+    std::vector<double> p = ctx.base.fit(train, {nullptr, &w, quick}).pred;
+    for (double& v : p) v = phi(c, v);
+    return p;
+  };
+  std::string chosen;
+  Finding f = model_finding(
+      ctx, "minor_loop_noncongruence",
+      "output-dependent loop height y = phi_c(Gamma[u]), phi_c(w) = w + c w^2 (c chosen in-fold)",
+      [&](int fold) {
+        const std::vector<char> train = ctx.train_mask(fold);
+        const FoldFit& base = ctx.by_fold[static_cast<std::size_t>(fold)];
+        // Every candidate, c = 0 too, on one grid: chosen like for like, then refitted.
+        double best = std::numeric_limits<double>::infinity(), best_c = 0.0;
+        for (double c : {0.0, -0.2, -0.1, 0.1, 0.2, 0.3, 0.5, 0.8}) {
+          const double ss = training_sse(rec.y, predict(train, c, true), train);
+          if (ss < best * (1.0 - 1e-9)) {
+            best = ss;
+            best_c = c;
+          }
+        }
+        chosen += fmt::format("{}{:+g}", chosen.empty() ? "" : ", ", best_c);
+        return best_c == 0.0 ? base.pred : predict(train, best_c, false);
+      },
+      "loops whose height depends on the output level (a monotone map of a Preisach model)");
+  f.extended_model += " (c per fold: " + chosen + ")";
+  const double gain_p = f.p_value;
+  f.evidence = describe(sig) + "; " + f.evidence;
+  f.score = sig.z;
+  f.p_value = sig.p_value;
+  // The signature assumes independent reading errors; quantisation and interpolation make it
+  // fire on clean data now and then (measured: p = 0.0014 on a clean rig record at 0.02 mm
+  // noise). Named when the extension also gains on held-out cycles (intersection-union), or
+  // by the gain alone at alpha (a sensor step near the loops' difference leaves the signature
+  // few comparisons; the extension uses every reading).
+  // Not by the gain alone where the sensor step dominates the noise (a step over twice the
+  // white noise): the same true value then rounds the same way in every cycle, the held-out
+  // cycles share the training cycles' rounding errors, and a flexible map gains by fitting
+  // them (measured: a clean record of the independent generator at a 0.04 mm step and 0.01 mm
+  // noise, the map gaining 8.2 % at p = 0.004 with the signature at p = 0.83).
+  const bool gains = f.gain_pct >= ctx.opt.min_gain_pct;
+  const bool rounding = ctx.resolution > 2.0 * ctx.white;
+  f.detected = gains && ((gain_p < ctx.opt.alpha && !rounding) ||
+                         (sig.p_value < ctx.opt.alpha && gain_p < ctx.opt.gain_alpha));
+  return f;
+}
+
+}  // namespace scpkit::diagnosis
