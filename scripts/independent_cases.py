@@ -2,12 +2,14 @@
 """Test files for `scpkit diagnose` from a generator independent of the project's rig.
 
 Usage: scripts/independent_cases.py OUT_DIR N [FIRST [SIDE-EFFECT]] [--once-per-hold]
-[--ar-noise RHO] [--one-load]   (N files per effect and side, seeds FIRST..FIRST+N-1; file names
+[--ar-noise RHO] [--one-load] [--cells N]   (N files per effect and side, seeds FIRST..FIRST+N-1; file names
 SIDE-EFFECT-I.csv carry the truth; SIDE-EFFECT, e.g. load-none, makes that kind only, with the
 same seeds; --once-per-hold reads voltage creep once per hold instead of three times;
 --ar-noise RHO makes the sensor noise AR(1) with lag-one correlation RHO; --one-load tests
 voltage at the first of the drawn loads only, one segment, without the two effects that need
-several loads; all else alike). Then
+several loads; --cells N gives the Preisach truth N relay levels instead of 30 (load) and 24
+(voltage): on the coarse grid a moving Preisach's shift often crosses no relay threshold and the
+non-congruence is not in the data; all else alike). Then
 scripts/independent_run.sh OUT_DIR prints one line per file: name, truth, named cause.
 
 Written apart from lib/src/rig (plain Python, no numpy): a relay-grid Preisach truth with a
@@ -110,7 +112,7 @@ def make_load(rng, effect, mag, out):
     step = umax / rng.choice([8, 10, 12])
     kind = "minor" if effect == "minor_loop_noncongruence" else rng.choice(["damped", "repeated", "minor"])
     seq = load_protocol(rng, kind, umax, step)
-    P = Preisach(0.0, umax * 1.001, 30, density(umax * rng.uniform(0.15, 0.4), umax * rng.uniform(0.3, 0.6), umax * 0.5))
+    P = Preisach(0.0, umax * 1.001, CELLS or 30, density(umax * rng.uniform(0.15, 0.4), umax * rng.uniform(0.3, 0.6), umax * 0.5))
     lin = rng.uniform(0.3, 0.8)
     # scale: total range about 2.5-4 mm
     raw = []
@@ -156,7 +158,7 @@ def make_voltage(rng, effect, mag, out):
         loads = loads[:1]
     vmax = rng.choice([6.0, 8.0, 10.0])
     steps = rng.choice([6, 8, 10])
-    P = Preisach(0.0, vmax * 1.001, 24, density(vmax * rng.uniform(0.1, 0.3), vmax * rng.uniform(0.5, 0.7), vmax * 0.4))
+    P = Preisach(0.0, vmax * 1.001, CELLS or 24, density(vmax * rng.uniform(0.1, 0.3), vmax * rng.uniform(0.5, 0.7), vmax * 0.4))
     dwell = rng.choice([10.0, 30.0, 60.0])
     noise = rng.choice([0.005, 0.01, 0.02])
     q = rng.choice([0.0, 0.01, 0.04])
@@ -215,11 +217,16 @@ MAGS = {
 ONCE_PER_HOLD = False  # --once-per-hold: voltage creep read once per hold (no readings during holds)
 AR_RHO = 0.0  # --ar-noise RHO: AR(1) sensor noise (clean records with it should stay `none`)
 ONE_LOAD = False  # --one-load: voltage tests at the first of the drawn loads only (one segment)
+CELLS = None  # --cells N: N relay levels in the Preisach truth (default 30 load, 24 voltage)
 if __name__ == "__main__":
     args = sys.argv[1:]
     if "--ar-noise" in args:
         k = args.index("--ar-noise")
         AR_RHO = float(args[k + 1])
+        del args[k:k + 2]
+    if "--cells" in args:
+        k = args.index("--cells")
+        CELLS = int(args[k + 1])
         del args[k:k + 2]
     ONCE_PER_HOLD = "--once-per-hold" in args
     ONE_LOAD = "--one-load" in args
