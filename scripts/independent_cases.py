@@ -218,16 +218,19 @@ ONCE_PER_HOLD = False  # --once-per-hold: voltage creep read once per hold (no r
 AR_RHO = 0.0  # --ar-noise RHO: AR(1) sensor noise (clean records with it should stay `none`)
 ONE_LOAD = False  # --one-load: voltage tests at the first of the drawn loads only (one segment)
 CELLS = None  # --cells N: N relay levels in the Preisach truth (default 30 load, 24 voltage)
+def take_value(args, flag, convert, default):
+    """Removes `flag VALUE` from args and returns convert(VALUE), or default without the flag."""
+    if flag not in args:
+        return default
+    k = args.index(flag)
+    value = convert(args[k + 1])
+    del args[k:k + 2]
+    return value
+
 if __name__ == "__main__":
     args = sys.argv[1:]
-    if "--ar-noise" in args:
-        k = args.index("--ar-noise")
-        AR_RHO = float(args[k + 1])
-        del args[k:k + 2]
-    if "--cells" in args:
-        k = args.index("--cells")
-        CELLS = int(args[k + 1])
-        del args[k:k + 2]
+    AR_RHO = take_value(args, "--ar-noise", float, AR_RHO)
+    CELLS = take_value(args, "--cells", int, CELLS)
     ONCE_PER_HOLD = "--once-per-hold" in args
     ONE_LOAD = "--one-load" in args
     args = [a for a in args if a not in ("--once-per-hold", "--one-load")]

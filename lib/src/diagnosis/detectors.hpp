@@ -66,12 +66,6 @@ Finding not_tested(const Context& ctx, const std::string& effect, const std::str
 double training_sse(const std::vector<double>& y, const std::vector<double>& p,
                     const std::vector<char>& train);
 
-/// Each row's segment load, normalised: (F - F_mid) / (F range).
-std::vector<double> centred_load(const Record& rec);
-
-/// Subtracts each column's mean within each load segment.
-void centre_per_segment(const Record& rec, Eigen::MatrixXd& X);
-
 /// A model-free signature's verdict in words.
 std::string describe(const Signature& s);
 

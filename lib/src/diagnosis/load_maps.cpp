@@ -8,6 +8,31 @@
 #include "scpkit/hysteresis/preisach.hpp"
 
 namespace scpkit::diagnosis {
+namespace {
+
+// The segment's normalised load (F - F_mid) / (F range) for each row.
+std::vector<double> centred_load(const Record& rec) {
+  const auto [lo, hi] = std::minmax_element(rec.seg_load.begin(), rec.seg_load.end());
+  const double mid = 0.5 * (*lo + *hi), span = std::max(*hi - *lo, 1e-300);
+  std::vector<double> x(rec.size());
+  for (std::size_t t = 0; t < rec.size(); ++t)
+    x[t] = (rec.seg_load[static_cast<std::size_t>(rec.seg[t])] - mid) / span;
+  return x;
+}
+
+// Subtracts each column's mean within each load segment.
+void centre_per_segment(const Record& rec, Eigen::MatrixXd& X) {
+  for (std::size_t s = 0; s < rec.seg_first.size(); ++s) {
+    const auto f = static_cast<Eigen::Index>(rec.seg_first[s]);
+    const auto c = static_cast<Eigen::Index>(rec.seg_count[s]);
+    for (Eigen::Index j = 0; j < X.cols(); ++j) {
+      const double m = X.col(j).segment(f, c).mean();
+      X.col(j).segment(f, c).array() -= m;
+    }
+  }
+}
+
+}  // namespace
 
 Finding detect_load_shape_coupling(Context& ctx) {
   const Record& rec = ctx.rec;
