@@ -229,11 +229,16 @@ def take_value(args, flag, convert, default):
 
 if __name__ == "__main__":
     args = sys.argv[1:]
+    if not args or args[0] in ("-h", "--help"):
+        print("\n\n".join(__doc__.split("\n\n")[:2]))
+        sys.exit(0 if args else 2)
     AR_RHO = take_value(args, "--ar-noise", float, AR_RHO)
     CELLS = take_value(args, "--cells", int, CELLS)
     ONCE_PER_HOLD = "--once-per-hold" in args
     ONE_LOAD = "--one-load" in args
     args = [a for a in args if a not in ("--once-per-hold", "--one-load")]
+    if len(args) < 2 or not args[1].isdigit():
+        sys.exit("independent_cases.py: need OUT_DIR and N (files per kind); --help for usage")
     outdir, n = args[0], int(args[1])
     first = int(args[2]) if len(args) > 2 else 0
     only = args[3] if len(args) > 3 else None
