@@ -102,6 +102,7 @@ Finding detect_outliers(Context& ctx) {
   // A reading within kRepeated robust sigmas of the readings at its protocol point is repeated
   // there: whatever its misfit, every pass through that point shares it, and it is the model's
   // (where a transformation is steeper than the baseline's grid follows), not a spike.
+  // kThrough: a branch through the reading (`through`, below).
   constexpr double kRepeated = 1.5, kThrough = 8.0;
   // Off its protocol point on the readings themselves (off_alone, below; the score): kAlone
   // scales of their scatter, and kAside robust sigmas off its neighbours. Measured on 444 load
@@ -148,6 +149,10 @@ Finding detect_outliers(Context& ctx) {
     prev_u[t] = rec.u[t - 1] != rec.u[t] ? rec.u[t - 1] : prev_u[t - 1];
   for (std::size_t t = n - 1; t-- > 0;)
     next_u[t] = rec.u[t + 1] != rec.u[t] ? rec.u[t + 1] : next_u[t + 1];
+  // Each screened reading's distance off its neighbours, in robust sigmas.
+  std::vector<double> z(n, 0.0);
+  for (std::size_t i = 0; i < screened.size(); ++i)
+    z[screened[i]] = std::abs(spike[i] - med) / scale;
   const ProtocolPoints points(rec, screened);
   std::vector<double> deviation(n, none), compared;
   for (std::size_t t : screened) {
@@ -164,16 +169,15 @@ Finding detect_outliers(Context& ctx) {
   // largest 5 %, over 0.871 (its ratio to sigma for a normal); at least half a sensor step
   // (readings of one true value round alike, so a step is rare but not a spike) and 1e-4 of
   // the range.
-  // Each screened reading's distance off its neighbours, in robust sigmas.
-  std::vector<double> z(n, 0.0);
-  for (std::size_t i = 0; i < screened.size(); ++i)
-    z[screened[i]] = std::abs(spike[i] - med) / scale;
+  std::vector<double> dev(n, none);  // NaN: tests at several loads, or no other reading there
+  for (std::size_t t : screened) {
+    if (!rec.several_loads) dev[t] = points.deviation(rec.y, t);
+  }
   const std::vector<double> off_alone = [&] {
     std::vector<double> off(n, 0.0);
     if (rec.several_loads) return off;
-    std::vector<double> dev(n, none), sq;
+    std::vector<double> sq;
     for (std::size_t t : screened) {
-      dev[t] = points.deviation(rec.y, t);
       if (!std::isnan(dev[t])) sq.push_back(dev[t] * dev[t]);
     }
     if (sq.size() < 20) return off;
@@ -309,8 +313,7 @@ Finding detect_outliers(Context& ctx) {
     // themselves are compared, as every fold's prediction differs there where the response
     // is steep (measured: the real SMA record's rising branch at 2.7 V, read alike in four
     // segments, 0.5-0.8 robust sigmas apart, was named `outliers`).
-    const double repeated =
-        rec.several_loads ? repro : std::abs(points.deviation(rec.y, t)) / d_scale;
+    const double repeated = rec.several_loads ? repro : std::abs(dev[t]) / d_scale;
     if (repeated < kRepeated) continue;
     const double strict = reversal ? 2.0 : 1.0;
     const double lv = std::abs(level[i] - r_med) / r_scale;
