@@ -188,10 +188,13 @@ int run_diagnose(const std::vector<std::string>& args) {
                   {"heldout_rows", d.heldout_rows},
                   {"rms_pct_range", d.rms_pct_range},
                   {"max_pct_range", d.max_pct_range},
-                  {"sustained_rms_pct_range", d.sustained_rms_pct_range}}},
+                  {"sustained_rms_pct_range", d.sustained_rms_pct_range},
+                  {"identified_rows", d.identified_rows},
+                  {"identified_sustained_rms_pct_range", d.identified_sustained_rms_pct_range}}},
                 {"noise_floor_pct_range", d.noise_floor_pct_range},
                 {"findings", findings},
-                {"cause", d.cause}});
+                {"cause", d.cause},
+                {"cause_note", d.cause_note}});
     return kOk;
   }
   std::cout << fmt::format("{}: {} rows, input {}, response {}\n", m.source(), m.rows(), in.column,
@@ -215,7 +218,8 @@ int run_diagnose(const std::vector<std::string>& args) {
         "  extended model: {} (held-out E_RMS {:.3f} -> {:.3f} %, gain {:.1f} %)\n",
         f.extended_model, f.heldout_rms_before, f.heldout_rms_after, f.gain_pct);
   }
-  std::cout << "  cause: " << d.cause << "\n";
+  std::cout << "  cause: " << d.cause << (d.cause_note.empty() ? "" : " (" + d.cause_note + ")")
+            << "\n";
   return kOk;
 }
 

@@ -2,14 +2,15 @@
 """Test files for `scpkit diagnose` from a generator independent of the project's rig.
 
 Usage: scripts/independent_cases.py OUT_DIR N [FIRST [SIDE-EFFECT]] [--once-per-hold]
-[--ar-noise RHO] [--one-load] [--cells N]   (N files per effect and side, seeds FIRST..FIRST+N-1; file names
+[--ar-noise RHO] [--one-load] [--cells N] [--random-turns]   (N files per effect and side, seeds FIRST..FIRST+N-1; file names
 SIDE-EFFECT-I.csv carry the truth; SIDE-EFFECT, e.g. load-none, makes that kind only, with the
 same seeds; --once-per-hold reads voltage creep once per hold instead of three times;
 --ar-noise RHO makes the sensor noise AR(1) with lag-one correlation RHO; --one-load tests
 voltage at the first of the drawn loads only, one segment, without the two effects that need
 several loads; --cells N gives the Preisach truth N relay levels instead of 30 (load) and 24
 (voltage): on the coarse grid a moving Preisach's shift often crosses no relay threshold and the
-non-congruence is not in the data; all else alike). Then
+non-congruence is not in the data; --random-turns replaces the damped and repeated load
+protocols and the voltage cycles by 5-9 turning points drawn on the step grid; all else alike). Then
 scripts/independent_run.sh OUT_DIR prints one line per file: name, truth, named cause.
 
 Written apart from lib/src/rig (plain Python, no numpy): a relay-grid Preisach truth with a
@@ -77,6 +78,22 @@ class Hold:
             out.append((self.t, dwell * (r + 1) / per_hold, y))
         return out
 
+def random_turns(rng, top, step):
+    """Inputs through 5-9 turning points drawn on the grid of `step` in [0, top], alternately
+    up and down by at least two steps, more while they take fewer than four full cycles' steps,
+    from 0 and back to it (--random-turns)."""
+    k_top = int(round(top / step))
+    seq, k, turns, r = [], 0, rng.randint(5, 9), 0
+    while r < turns or len(seq) < 8 * k_top:
+        if r % 2 == 0:
+            k_next = rng.randint(min(k + 2, k_top), k_top)
+        else:
+            k_next = rng.randint(0, max(k - 2, 0))
+        seq += [(k + (k_next - k) * j / abs(k_next - k)) * step for j in range(1, abs(k_next - k) + 1)] if k_next != k else []
+        k, r = k_next, r + 1
+    seq += [(k - j) * step for j in range(1, k + 1)]
+    return seq
+
 def load_protocol(rng, kind, umax, step):
     seq = []
     def ramp(a, b):
@@ -93,6 +110,8 @@ def load_protocol(rng, kind, umax, step):
         for _ in range(6):
             seq += ramp(u, umax); u = umax
             seq += ramp(u, 0.0); u = 0.0
+    elif kind == "random":  # turning points drawn on the step grid (--random-turns)
+        seq += random_turns(rng, umax, step)
     else:  # minor loops between the same extrema from different histories
         lo_m, hi_m = 0.35 * umax, 0.7 * umax
         for _ in range(2):
@@ -111,6 +130,8 @@ def make_load(rng, effect, mag, out):
     umax = rng.choice([250.0, 300.0, 400.0])
     step = umax / rng.choice([8, 10, 12])
     kind = "minor" if effect == "minor_loop_noncongruence" else rng.choice(["damped", "repeated", "minor"])
+    if RANDOM_TURNS and kind != "minor":
+        kind = "random"
     seq = load_protocol(rng, kind, umax, step)
     P = Preisach(0.0, umax * 1.001, CELLS or 30, density(umax * rng.uniform(0.15, 0.4), umax * rng.uniform(0.3, 0.6), umax * 0.5))
     lin = rng.uniform(0.3, 0.8)
@@ -169,7 +190,7 @@ def make_voltage(rng, effect, mag, out):
     for amp in [1.0, 0.75, 0.5] if rng.random() < 0.5 else [1.0, 1.0, 1.0]:
         for k in range(1, steps + 1): seq.append(amp * vmax * k / steps)
         for k in range(steps - 1, -1, -1): seq.append(amp * vmax * k / steps)
-    seq = [0.0] + seq
+    seq = [0.0] + (random_turns(rng, vmax, vmax / steps) if RANDOM_TURNS else seq)
     ref = [P.step(v) for v in seq]; P.reset()
     hmin, hmax = min(ref), max(ref)
     rows = []
@@ -217,6 +238,7 @@ MAGS = {
 ONCE_PER_HOLD = False  # --once-per-hold: voltage creep read once per hold (no readings during holds)
 AR_RHO = 0.0  # --ar-noise RHO: AR(1) sensor noise (clean records with it should stay `none`)
 ONE_LOAD = False  # --one-load: voltage tests at the first of the drawn loads only (one segment)
+RANDOM_TURNS = False  # --random-turns: damped and repeated load protocols and voltage cycles become random turning points
 CELLS = None  # --cells N: N relay levels in the Preisach truth (default 30 load, 24 voltage)
 def take_value(args, flag, convert, default):
     """Removes `flag VALUE` from args and returns convert(VALUE), or default without the flag."""
@@ -236,7 +258,8 @@ if __name__ == "__main__":
     CELLS = take_value(args, "--cells", int, CELLS)
     ONCE_PER_HOLD = "--once-per-hold" in args
     ONE_LOAD = "--one-load" in args
-    args = [a for a in args if a not in ("--once-per-hold", "--one-load")]
+    RANDOM_TURNS = "--random-turns" in args
+    args = [a for a in args if a not in ("--once-per-hold", "--one-load", "--random-turns")]
     if len(args) < 2 or not args[1].isdigit():
         sys.exit("independent_cases.py: need OUT_DIR and N (files per kind); --help for usage")
     outdir, n = args[0], int(args[1])

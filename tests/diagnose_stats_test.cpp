@@ -228,5 +228,44 @@ TEST(ReturnPointSignature, FindsADriftOfAFewNoiseSigmas) {
   EXPECT_GT(time_signature_rate(0.0, 8.0, 0.01, 24), 0.6);
 }
 
+// identified_readings: on full cycles 0 -> 1 -> 0, read every 1/8, every Everett pair of a
+// held-out reading's memory is traversed by the other cycles, so every held-out reading is
+// identified. One cycle also holds an excursion 0 -> 1/4 -> 1/8 -> 0: its reading at 1/8 on the
+// way down from 1/4 rests on the pair (1/8, 1/4), which no other cycle traverses, so it alone
+// is not identified held out; the readings of the excursion's rise (pairs from 0, as every
+// rise) are.
+TEST(IdentifiedReadings, PairsTraversedByTheOtherFolds) {
+  DiagnoseData data;
+  const int cycles = 10, excursion_cycle = 6;
+  std::size_t lonely = 0;
+  data.input.push_back(0.0);
+  for (int c = 0; c < cycles; ++c) {
+    for (int k = 1; k <= 8; ++k) data.input.push_back(k / 8.0);
+    for (int k = 7; k >= 0; --k) data.input.push_back(k / 8.0);
+    if (c == excursion_cycle) {
+      data.input.insert(data.input.end(), {1.0 / 8.0, 2.0 / 8.0, 1.0 / 8.0});
+      lonely = data.input.size() - 1;
+      data.input.push_back(0.0);
+    }
+  }
+  std::mt19937 rng(3);
+  std::normal_distribution<double> N(0.0, 0.01);
+  for (double u : data.input) data.output.push_back(u * u + N(rng));
+  const Record rec = make_record(data, DiagnoseOptions{});
+  ASSERT_GE(rec.folds, 2);
+  ASSERT_GE(rec.fold[lonely], 0);  // held out
+  const std::vector<char> id = identified_readings(rec, 8);
+  int held_out = 0;
+  for (std::size_t t = 0; t < rec.size(); ++t) {
+    if (rec.fold[t] < 0) {
+      EXPECT_FALSE(id[t]) << t;  // not held out
+      continue;
+    }
+    ++held_out;
+    EXPECT_EQ(static_cast<bool>(id[t]), t != lonely) << "reading " << t << ", input " << rec.u[t];
+  }
+  EXPECT_GT(held_out, 100);
+}
+
 }  // namespace
 }  // namespace scpkit::diagnosis

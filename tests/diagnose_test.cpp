@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <numbers>
 #include <random>
 #include <utility>
 
@@ -260,6 +261,20 @@ TEST(Diagnose, SpikesAtTurningValuesAreNamed) {
   }
 }
 
+// A Preisach model on `grid` whose density at (a, b) is `density(a, b)`, taken at each cell's
+// centre.
+PreisachModel density_model(const PreisachGrid& grid,
+                            const std::function<double(double, double)>& density) {
+  Eigen::VectorXd w(grid.cells());
+  for (int i = 0; i < grid.levels; ++i) {
+    for (int j = i; j < grid.levels; ++j) {
+      const double b = grid.lo + (i + 0.5) * grid.step(), a = grid.lo + (j + 0.5) * grid.step();
+      w[grid.cell_index(i, j)] = density(a, b) * PreisachGrid::relative_area(i, j);
+    }
+  }
+  return PreisachModel(grid, w, 0.0);
+}
+
 // First-order reversal curves of a steep phase transformation (the shape of the SMA wire in
 // ../shared/datasets), steeper than the baseline's grid follows. Each segment rises from 0 V
 // along the major branch, so the readings at one voltage on that branch repeat in every
@@ -271,16 +286,9 @@ TEST(Diagnose, SpikesAtTurningValuesAreNamed) {
 // records, on the falls, are still named.
 DiagnoseData steep_forcs(double width_a, double width_b, unsigned seed) {
   const PreisachGrid grid{0.0, 3.6, 72};
-  Eigen::VectorXd w(grid.cells());
-  for (int i = 0; i < grid.levels; ++i) {
-    for (int j = i; j < grid.levels; ++j) {
-      const double b = grid.lo + (i + 0.5) * grid.step(), a = grid.lo + (j + 0.5) * grid.step();
-      w[grid.cell_index(i, j)] =
-          std::exp(-std::pow((a - 2.75) / width_a, 2) - std::pow((b - 2.2) / width_b, 2)) *
-          PreisachGrid::relative_area(i, j);
-    }
-  }
-  const PreisachModel model(grid, w, 0.0);
+  const PreisachModel model = density_model(grid, [&](double a, double b) {
+    return std::exp(-std::pow((a - 2.75) / width_a, 2) - std::pow((b - 2.2) / width_b, 2));
+  });
   DiagnoseData data;
   auto ramp = [&](double from, double to, int s) {
     const auto steps = std::lround(std::abs(to - from) / 0.1);
@@ -334,6 +342,72 @@ TEST(Diagnose, SteepTransitionsAreNotSpikes) {
     EXPECT_EQ(spiked.cause, "outliers")
         << "widths " << wa << ", " << wb << ": " << finding(spiked, "outliers").evidence;
   }
+}
+
+// A load test whose turning points are drawn at random on the load grid (not cycles between
+// fixed extrema): a held-out cycle then crosses parts of the Preisach plane that the other
+// folds never traversed, and the baseline's guess there misses by several times the noise. The
+// readings whose every Everett pair the training observed are predicted to the noise, so
+// the record is `none`, not `unexplained` (3 of these 13 clean records were `unexplained`
+// before identified_readings, and one `outliers`: a descent read once, guessed 11 robust
+// sigmas off its neighbours). A ripple of 8 % of the range with a period of 30 readings, which
+// no effect of the vocabulary models, is still named.
+DiagnoseData random_turns(unsigned seed, double ripple) {
+  std::mt19937_64 rng(seed);
+  const PreisachGrid grid{0.0, 300.0, 40};
+  const PreisachModel model = density_model(grid, [](double a, double b) {
+    return std::exp(-std::pow((a - b) / 80.0, 2) - std::pow(((a + b) / 2 - 140.0) / 150.0, 2)) +
+           0.15;
+  });
+  DiagnoseData data;
+  const int top = 8;  // steps of 37.5 g
+  auto go = [&](int from, int to) {
+    for (int k = from; k != to;) {
+      k += to > from ? 1 : -1;
+      data.input.push_back(37.5 * k);
+    }
+  };
+  data.input.push_back(0.0);
+  int k = 0;
+  const int turns = std::uniform_int_distribution<int>(5, 9)(rng);
+  for (int r = 0; r < turns || data.input.size() < 5 * top; ++r) {
+    const int next = r % 2 == 0 ? std::uniform_int_distribution<int>(std::min(k + 2, top), top)(rng)
+                                : std::uniform_int_distribution<int>(0, std::max(k - 2, 0))(rng);
+    go(k, next);
+    k = next;
+  }
+  go(k, 0);
+  PreisachState state = PreisachState::negative_saturation(grid);
+  const Eigen::VectorXd raw = model.simulate(state, data.input);
+  const double range = raw.maxCoeff() - raw.minCoeff();
+  std::normal_distribution<double> noise(0.0, 0.004);
+  for (Eigen::Index t = 0; t < raw.size(); ++t) {
+    const double alt = ripple * std::sin(2.0 * std::numbers::pi * static_cast<double>(t) / 30.0);
+    data.output.push_back(3.0 * ((raw[t] - raw.minCoeff()) / range + alt) +
+                          0.003 * data.input[static_cast<std::size_t>(t)] + noise(rng));
+  }
+  return data;
+}
+
+TEST(Diagnose, RandomTurningPointsAreNotUnexplained) {
+  for (unsigned seed = 1; seed <= 13; ++seed) {
+    const Diagnosis d = diagnose(random_turns(seed, 0.0), DiagnoseOptions{});
+    EXPECT_EQ(d.cause, "none") << "seed " << seed << ": held-out " << d.sustained_rms_pct_range
+                               << " %, floor " << d.noise_floor_pct_range << " %; " << d.cause_note;
+  }
+  // The ripple: wherever it is material on the held-out readings and at least 10 of them are
+  // identified, it is not `none` (fewer identified readings cannot tell it from the
+  // baseline's guesses).
+  int checked = 0;
+  for (unsigned seed = 1; seed <= 13; ++seed) {
+    const Diagnosis d = diagnose(random_turns(seed, 0.08), DiagnoseOptions{});
+    if (d.identified_rows < 10 ||
+        d.sustained_rms_pct_range <= std::max(2.0 * d.noise_floor_pct_range, 1.0))
+      continue;
+    ++checked;
+    EXPECT_NE(d.cause, "none") << "seed " << seed << ": " << d.cause_note;
+  }
+  EXPECT_GE(checked, 8);
 }
 
 // A damped protocol returns to its lowest load only at its very end (index 17): that reading,

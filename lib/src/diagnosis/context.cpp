@@ -136,6 +136,7 @@ Context::Context(const Record& record, const Baseline& b, const DiagnoseOptions&
   congruency = loops.raw;
   congruency_robust = loops.robust;
   holds = hold_signature(rec, floor);
+  identified = identified_readings(rec, base.options().levels);
 }
 
 std::vector<char> Context::train_mask(int fold) const {

@@ -31,6 +31,8 @@ struct Context {
   Signature congruency, holds;
   Signature congruency_robust;  ///< the same, blind to single readings off their neighbours
   Signature dwell;  ///< creep with one reading per hold: residuals against the hold times
+  /// Held-out readings whose memory their fold's training identified (identified_readings).
+  std::vector<char> identified;
   std::mt19937_64 rng;
 
   Context(const Record& r, const Baseline& b, const DiagnoseOptions& o);

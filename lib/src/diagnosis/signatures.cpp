@@ -5,6 +5,7 @@
 #include <boost/math/special_functions/beta.hpp>
 #include <cmath>
 #include <map>
+#include <set>
 
 #include "scpkit/hysteresis/preisach.hpp"
 #include "stats.hpp"
@@ -59,6 +60,55 @@ std::vector<std::vector<long>> memory_states(const Record& rec) {
     }
   }
   return keys;
+}
+
+std::vector<char> identified_readings(const Record& rec, int levels) {
+  const auto [umin, umax] = std::minmax_element(rec.u.begin(), rec.u.end());
+  const double lo = *umin, span = std::max(*umax - *umin, 1e-300);
+  const auto node = [&](double v) { return std::lround((v - lo) / span * levels); };
+  const long bottom = 0;
+  const PreisachGrid grid{lo, lo + span, 1};
+  // Per reading: the pairs its value rests on (node pairs, lower first) and the pair its branch
+  // observes.
+  std::vector<std::vector<std::pair<long, long>>> needs(rec.size());
+  std::vector<std::pair<long, long>> sees(rec.size());
+  const auto ordered = [](long a, long b) {
+    return std::make_pair(std::min(a, b), std::max(a, b));
+  };
+  PreisachState state = PreisachState::negative_saturation(grid);
+  long top = 0;
+  for (std::size_t t = 0; t < rec.size(); ++t) {
+    if (t == 0 || rec.seg[t] != rec.seg[t - 1]) {
+      state = PreisachState::negative_saturation(grid);
+      top = 0;
+      for (std::size_t s = t; s < rec.size() && rec.seg[s] == rec.seg[t]; ++s)
+        top = std::max(top, node(rec.u[s]));
+    }
+    state.apply(rec.u[t]);
+    const auto tp = state.turning_points();
+    std::vector<long> x{bottom};
+    for (double p : tp) x.push_back(node(p));
+    if (x.size() >= 2 && x[1] == top) x.erase(x.begin());
+    for (std::size_t i = 0; i + 1 < x.size(); ++i) {
+      if (x[i] != x[i + 1]) needs[t].push_back(ordered(x[i], x[i + 1]));
+    }
+    const std::size_t n = tp.size();
+    sees[t] = n >= 2 ? ordered(node(tp[n - 2]), node(tp[n - 1])) : ordered(bottom, node(tp[0]));
+  }
+  std::vector<std::set<std::pair<long, long>>> seen(static_cast<std::size_t>(rec.folds));
+  for (std::size_t t = 0; t < rec.size(); ++t) {
+    for (int k = 0; k < rec.folds; ++k) {
+      if (rec.trains(t, k)) seen[static_cast<std::size_t>(k)].insert(sees[t]);
+    }
+  }
+  std::vector<char> out(rec.size(), 0);
+  for (std::size_t t = 0; t < rec.size(); ++t) {
+    if (rec.fold[t] < 0) continue;
+    const auto& s = seen[static_cast<std::size_t>(rec.fold[t])];
+    out[t] = std::all_of(needs[t].begin(), needs[t].end(),
+                         [&](const std::pair<long, long>& p) { return s.count(p) > 0; });
+  }
+  return out;
 }
 
 namespace {

@@ -40,6 +40,16 @@ struct ReturnPointSignatures {
 /// with equal keys are in the same memory state.
 std::vector<std::vector<long>> memory_states(const Record& rec);
 
+/// Whether each reading's value is fixed by what its fold trained on: a rate-independent
+/// operator's output is a sum of Everett values, one per pair of consecutive dominant turning
+/// points (the current input last), and the training readings on a branch observe the pair of
+/// its starting turning point and their input. A held-out reading is identified when every
+/// pair of its memory, on the nodes of a grid of `levels` cells over the inputs, was observed
+/// in its fold's training (a pair on one node contributes nothing). The first rise's pair from
+/// the lowest input counts only below the segment's top (above it, every later reading shares
+/// it). Readings that are not held out are 0.
+std::vector<char> identified_readings(const Record& rec, int levels);
+
 /// `sigma`: the noise of one reading (the diagnosis' floor).
 ReturnPointSignatures return_point_signatures(const Record& rec, double sigma);
 /// Minor loops between the same extrema after different histories: does the difference of two

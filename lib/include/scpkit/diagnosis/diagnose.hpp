@@ -58,8 +58,13 @@ struct Diagnosis {
   /// held-out E_RMS without its largest 5 % of residuals: what `none` is judged on
   double sustained_rms_pct_range = 0.0;
   double noise_floor_pct_range = 0.0;
+  /// Held-out readings whose memory the training folds identified (every Everett pair of the
+  /// memory observed in training), and their sustained E_RMS: `unexplained` needs both.
+  std::size_t identified_rows = 0;
+  double identified_sustained_rms_pct_range = 0.0;
   std::vector<Finding> findings;
   std::string cause = "none";
+  std::string cause_note;  ///< why `none` or `unexplained`, where it is not plain
 };
 
 struct DiagnoseOptions {
