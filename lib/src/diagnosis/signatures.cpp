@@ -93,7 +93,10 @@ std::vector<char> identified_readings(const Record& rec, int levels) {
       if (x[i] != x[i + 1]) needs[t].push_back(ordered(x[i], x[i + 1]));
     }
     const std::size_t n = tp.size();
-    sees[t] = n >= 2 ? ordered(node(tp[n - 2]), node(tp[n - 1])) : ordered(bottom, node(tp[0]));
+    // Back at negative saturation (the lowest input) the memory holds no turning point.
+    sees[t] = n >= 2   ? ordered(node(tp[n - 2]), node(tp[n - 1]))
+              : n == 1 ? ordered(bottom, node(tp[0]))
+                       : ordered(bottom, bottom);
   }
   std::vector<std::set<std::pair<long, long>>> seen(static_cast<std::size_t>(rec.folds));
   for (std::size_t t = 0; t < rec.size(); ++t) {
