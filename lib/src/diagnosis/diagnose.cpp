@@ -46,7 +46,6 @@ constexpr std::size_t kMinIdentified = 10;
 
 /// Held-out E_RMS (% of range) of the given readings without the largest 5 % of the residuals.
 double sustained_rms_pct(const diagnosis::Context& ctx, const std::vector<std::size_t>& rows) {
-  if (rows.empty()) return 0.0;
   std::vector<double> a;
   for (std::size_t t : rows) a.push_back(std::abs(ctx.r[t]));
   std::sort(a.begin(), a.end());

@@ -88,15 +88,13 @@ std::vector<char> identified_readings(const Record& rec, int levels) {
     const auto tp = state.turning_points();
     std::vector<long> x{bottom};
     for (double p : tp) x.push_back(node(p));
+    // The branch's pair: its starting turning point (the lowest input on the first rise) and
+    // the input; none back at negative saturation, where the memory holds no turning point.
+    sees[t] = x.size() >= 2 ? ordered(x[x.size() - 2], x.back()) : ordered(bottom, bottom);
     if (x.size() >= 2 && x[1] == top) x.erase(x.begin());
     for (std::size_t i = 0; i + 1 < x.size(); ++i) {
       if (x[i] != x[i + 1]) needs[t].push_back(ordered(x[i], x[i + 1]));
     }
-    const std::size_t n = tp.size();
-    // Back at negative saturation (the lowest input) the memory holds no turning point.
-    sees[t] = n >= 2   ? ordered(node(tp[n - 2]), node(tp[n - 1]))
-              : n == 1 ? ordered(bottom, node(tp[0]))
-                       : ordered(bottom, bottom);
   }
   std::vector<std::set<std::pair<long, long>>> seen(static_cast<std::size_t>(rec.folds));
   for (std::size_t t = 0; t < rec.size(); ++t) {
