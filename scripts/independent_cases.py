@@ -89,7 +89,8 @@ def random_turns(rng, top, step):
             k_next = rng.randint(min(k + 2, k_top), k_top)
         else:
             k_next = rng.randint(0, max(k - 2, 0))
-        seq += [(k + (k_next - k) * j / abs(k_next - k)) * step for j in range(1, abs(k_next - k) + 1)] if k_next != k else []
+        d = 1 if k_next > k else -1
+        seq += [(k + d * j) * step for j in range(1, abs(k_next - k) + 1)]
         k, r = k_next, r + 1
     seq += [(k - j) * step for j in range(1, k + 1)]
     return seq

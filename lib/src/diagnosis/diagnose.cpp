@@ -199,26 +199,28 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   const bool material = beyond && d.identified_rows >= kMinIdentified &&
                         d.identified_sustained_rms_pct_range > threshold;
   d.cause = material ? "unexplained" : "none";
-  if (beyond && !material)
-    d.cause_note = d.identified_rows < kMinIdentified
-                       ? fmt::format(
-                             "the held-out error beyond the noise floor is the baseline's guess "
-                             "where the other folds never traversed the input plane: only {} of {} "
-                             "held-out readings have a memory their training identified (need {})",
-                             d.identified_rows, d.heldout_rows, kMinIdentified)
-                       : fmt::format(
-                             "the held-out error beyond the noise floor lies where the other folds "
-                             "never traversed the input plane: on the {} of {} held-out readings "
-                             "whose memory their training identified, E_RMS without the largest "
-                             "5 % is {:.3f} % of range, within max(2 x floor, {} %)",
-                             d.identified_rows, d.heldout_rows,
-                             d.identified_sustained_rms_pct_range, kMaterialPct);
-  else if (material)
+  // The note says what `unexplained` was judged on, or why a held-out error beyond the floor
+  // is not it.
+  const std::string on_identified = fmt::format(
+      "on the {} of {} held-out readings whose memory their training identified, E_RMS without "
+      "the largest 5 % is {:.3f} % of range",
+      d.identified_rows, d.heldout_rows, d.identified_sustained_rms_pct_range);
+  if (material)
     d.cause_note = fmt::format(
-        "the held-out error is structured: on the {} of {} held-out readings whose memory "
-        "their training identified, E_RMS without the largest 5 % is {:.3f} % of range, above "
-        "max(2 x floor, {} %), and no named effect explains it",
-        d.identified_rows, d.heldout_rows, d.identified_sustained_rms_pct_range, kMaterialPct);
+        "the held-out error is structured: {}, above max(2 x floor, {} %), and no named effect "
+        "explains it",
+        on_identified, kMaterialPct);
+  else if (beyond && d.identified_rows < kMinIdentified)
+    d.cause_note = fmt::format(
+        "the held-out error beyond the noise floor is the baseline's guess where the other folds "
+        "never traversed the input plane: only {} of {} held-out readings have a memory their "
+        "training identified (need {})",
+        d.identified_rows, d.heldout_rows, kMinIdentified);
+  else if (beyond)
+    d.cause_note = fmt::format(
+        "the held-out error beyond the noise floor lies where the other folds never traversed "
+        "the input plane: {}, within max(2 x floor, {} %)",
+        on_identified, kMaterialPct);
   // One record driven by voltage, power or temperature (one load): its first rise is the only
   // one, so the running-maximum term's coefficient has no training rows when the first rise's
   // fold is held out, and its held-out gain may not show. The model-free return-point offset
