@@ -19,7 +19,9 @@ from two histories), the response in mm with optional quantisation; the effects 
 of PHYSICS.md section 5 might build them: a Kelvin element (readings during holds), a linear
 drift, spikes, a moving Preisach (non-congruence), a lonely stroke of one sign after every load
 change, an input-exponent shape change with load, a low-load knee in the offset map."""
-import math, random, sys, os
+import math, random, sys
+
+from case_sets import write_sets
 
 class Preisach:
     def __init__(self, lo, hi, n, dens):
@@ -252,34 +254,14 @@ def take_value(args, flag, convert, default):
 
 if __name__ == "__main__":
     args = sys.argv[1:]
-    if not args or args[0] in ("-h", "--help"):
-        print("\n\n".join(__doc__.split("\n\n")[:2]))
-        sys.exit(0 if args else 2)
     AR_RHO = take_value(args, "--ar-noise", float, AR_RHO)
     CELLS = take_value(args, "--cells", int, CELLS)
     ONCE_PER_HOLD = "--once-per-hold" in args
     ONE_LOAD = "--one-load" in args
     RANDOM_TURNS = "--random-turns" in args
     args = [a for a in args if a not in ("--once-per-hold", "--one-load", "--random-turns")]
-    if len(args) < 2 or not args[1].isdigit():
-        sys.exit("independent_cases.py: need OUT_DIR and N (files per kind); --help for usage")
-    outdir, n = args[0], int(args[1])
-    first = int(args[2]) if len(args) > 2 else 0
-    only = args[3] if len(args) > 3 else None
-    kinds = [("load", ["none", "drift", "outliers", "creep", "minor_loop_noncongruence"]),
-             ("voltage", ["none", "drift", "outliers", "creep", "lonely_stroke", "load_shape_coupling", "offset_nonlinearity"])]
-    names = [f"{side}-{e}" for side, effects in kinds for e in effects]
-    if only is not None and only not in names:
-        sys.exit(f"independent_cases.py: unknown kind '{only}' (one of: {', '.join(names)})")
-    os.makedirs(outdir, exist_ok=True)
-    for side, effects in kinds:
-        for e in effects:
-            if only is not None and only != f"{side}-{e}":
-                continue
-            if ONE_LOAD and e in ("load_shape_coupling", "offset_nonlinearity"):
-                continue
-            for i in range(first, first + n):
-                rng = random.Random(i * 7919 + len(e) * 31 + (0 if side == "load" else 100000))
-                mag = MAGS[e][i % len(MAGS[e])]
-                out = os.path.join(outdir, f"{side}-{e}-{i}.csv")
-                (make_load if side == "load" else make_voltage)(rng, e, mag, out)
+    write_sets("independent_cases.py", __doc__, args,
+               lambda side, rng, e, mag, out: (make_load if side == "load" else make_voltage)(rng, e, mag, out),
+               lambda side, e, i: random.Random(i * 7919 + len(e) * 31 + (0 if side == "load" else 100000)),
+               lambda e, i: MAGS[e][i % len(MAGS[e])],
+               skip=lambda e: ONE_LOAD and e in ("load_shape_coupling", "offset_nonlinearity"))

@@ -26,7 +26,9 @@ protocols, this one uses:
   the lonely stroke as the square of the running maximum; load-shape coupling as a mixture of
   two Preisach truths whose weight follows the load; the offset nonlinearity as a soft knee at
   low load or a cubic in load."""
-import math, random, sys, os
+import math, random, sys
+
+from case_sets import write_sets
 
 
 class Everett:
@@ -366,30 +368,10 @@ MAGS = {
 
 if __name__ == "__main__":
     args = sys.argv[1:]
-    if not args or args[0] in ("-h", "--help"):
-        print("\n\n".join(__doc__.split("\n\n")[:2]))
-        sys.exit(0 if args else 2)
     NOISE_FREE = "--noise-free" in args
     NO_EFFECT = "--no-effect" in args
     args = [a for a in args if a not in ("--noise-free", "--no-effect")]
-    if len(args) < 2 or not args[1].isdigit():
-        sys.exit("independent_cases_b.py: need OUT_DIR and N (files per kind); --help for usage")
-    outdir, n = args[0], int(args[1])
-    first = int(args[2]) if len(args) > 2 else 0
-    only = args[3] if len(args) > 3 else None
-    kinds = [("load", ["none", "drift", "outliers", "creep", "minor_loop_noncongruence"]),
-             ("voltage", ["none", "drift", "outliers", "creep", "lonely_stroke", "load_shape_coupling",
-                          "offset_nonlinearity"])]
-    names = [f"{side}-{e}" for side, effects in kinds for e in effects]
-    if only is not None and only not in names:
-        sys.exit(f"independent_cases_b.py: unknown kind '{only}' (one of: {', '.join(names)})")
-    os.makedirs(outdir, exist_ok=True)
-    for side, effects in kinds:
-        for e in effects:
-            if only is not None and only != f"{side}-{e}":
-                continue
-            for i in range(first, first + n):
-                rng = random.Random(f"b{side}{e}{i}")
-                mag = 0.0 if NO_EFFECT else MAGS[e][i % len(MAGS[e])]
-                out = os.path.join(outdir, f"{side}-{e}-{i}.csv")
-                (make_load if side == "load" else make_voltage)(rng, e, mag, out)
+    write_sets("independent_cases_b.py", __doc__, args,
+               lambda side, rng, e, mag, out: (make_load if side == "load" else make_voltage)(rng, e, mag, out),
+               lambda side, e, i: random.Random(f"b{side}{e}{i}"),
+               lambda e, i: 0.0 if NO_EFFECT else MAGS[e][i % len(MAGS[e])])

@@ -1,5 +1,5 @@
 #!/bin/bash
-# Runs `scpkit diagnose --json` on every file that scripts/independent_cases.py wrote and prints
+# Runs `scpkit diagnose --json` on every file that scripts/independent_cases.py or independent_cases_b.py wrote and prints
 # "name truth named ok|MISS" per file, then the count right. Usage: independent_run.sh DIR [SCPKIT]
 set -u
 dir=$1
