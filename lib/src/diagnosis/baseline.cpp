@@ -150,25 +150,27 @@ double MapFit::eval(const std::vector<double>& c, double F) const {
   const double x = (F - f_lo) / f_scale;
   double v = 0.0;
   for (std::size_t i = 0; i < std::min<std::size_t>(c.size(), 3); ++i) v += c[i] * std::pow(x, i);
-  if (c.size() > 3) v += c[3] * std::exp(-x / knee_width);
+  if (c.size() > 3) v += c[3] * (cubic ? x * x * x : std::exp(-x / knee_width));
   return v;
 }
 
 MapFit fit_maps(const std::vector<double>& F, const std::vector<double>& a,
-                const std::vector<double>& b, double knee_width, double f_lo, double f_scale) {
+                const std::vector<double>& b, double knee_width, double f_lo, double f_scale,
+                bool cubic) {
   MapFit m;
   m.f_lo = f_lo;
   m.f_scale = f_scale > 0.0 ? f_scale : 1.0;
   const std::set<double> distinct(F.begin(), F.end());
   const int order = std::min<int>(3, static_cast<int>(distinct.size()));  // 1, 2 or 3 terms
-  const bool knee = knee_width > 0.0 && distinct.size() >= 4;
-  m.knee_width = knee ? knee_width : 0.0;
+  const bool fourth = (cubic || knee_width > 0.0) && distinct.size() >= 4;
+  m.cubic = fourth && cubic;
+  m.knee_width = fourth && !cubic ? knee_width : 0.0;
   const auto rows = static_cast<Eigen::Index>(F.size());
-  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(rows, knee ? 4 : order);
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(rows, fourth ? 4 : order);
   for (Eigen::Index i = 0; i < rows; ++i) {
     const double x = (F[static_cast<std::size_t>(i)] - f_lo) / m.f_scale;
     for (int j = 0; j < order; ++j) A(i, j) = std::pow(x, j);
-    if (knee) A(i, 3) = std::exp(-x / knee_width);
+    if (fourth) A(i, 3) = m.cubic ? x * x * x : std::exp(-x / knee_width);
   }
   const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
   auto solve = [&](const std::vector<double>& v) {

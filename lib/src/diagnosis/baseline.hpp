@@ -45,12 +45,16 @@ Record make_record(const DiagnoseData& data, const DiagnoseOptions& options);
 struct MapFit {
   std::vector<double> coef_a, coef_b;  ///< on the basis below
   double knee_width = 0.0;             ///< 0: quadratic; > 0: plus exp(-(F - F_lo) / width)
+  bool cubic = false;                  ///< plus x^3 instead of a knee
   double f_lo = 0.0;
   double f_scale = 1.0;  ///< basis in x = (F - f_lo) / f_scale
   double eval(const std::vector<double>& c, double F) const;
 };
+/// Quadratic maps, plus a knee when knee_width > 0 or a cubic term when `cubic` (each needs
+/// four distinct loads).
 MapFit fit_maps(const std::vector<double>& F, const std::vector<double>& a,
-                const std::vector<double>& b, double knee_width, double f_lo, double f_scale);
+                const std::vector<double>& b, double knee_width, double f_lo, double f_scale,
+                bool cubic = false);
 
 /// One model fitted on the rows where train != 0, predicting every row.
 struct FoldFit {

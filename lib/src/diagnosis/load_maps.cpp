@@ -73,15 +73,21 @@ Finding detect_offset_nonlinearity(Context& ctx) {
     return not_tested(ctx, "offset_nonlinearity",
                       "needs tests at three or more constant loads (held out by load)");
   const std::set<double> distinct(rec.seg_load.begin(), rec.seg_load.end());
-  if (distinct.size() < 6)
+  if (distinct.size() < 5)
     return not_tested(ctx, "offset_nonlinearity",
-                      "needs six or more loads to fit and hold out a map beyond quadratic");
+                      "needs five or more loads to fit and hold out a map beyond quadratic");
+  // Five loads leave four in training (the end loads always train): a fourth basis function
+  // is then exactly determined and no knee width can be chosen; the cubic is the a-priori
+  // one (PHYSICS.md section 5: "higher order or softplus knee"). From six loads on, the knee
+  // width is chosen by leave-one-load-out over the training loads, 0 being the quadratic.
+  const bool cubic = distinct.size() == 5;
   const auto [flo, fhi] = std::minmax_element(rec.seg_load.begin(), rec.seg_load.end());
   const double f_lo = *flo, f_scale = *fhi - *flo;
   const std::vector<double> widths = {0.0, 0.08, 0.15, 0.3};
   return model_finding(
       ctx, "offset_nonlinearity",
-      "augmented baseline with f1, f2 = quadratic + knee exp(-(F - F_lo) / w) at low load",
+      cubic ? "augmented baseline with cubic maps f1, f2 (five loads)"
+            : "augmented baseline with f1, f2 = quadratic + knee exp(-(F - F_lo) / w) at low load",
       [&](int k) {
         const FoldFit& fit = ctx.by_fold[static_cast<std::size_t>(k)];
         std::vector<double> F, A, B;
@@ -93,7 +99,7 @@ Finding detect_offset_nonlinearity(Context& ctx) {
         }
         // The knee width by leave-one-load-out over the training loads (0 = quadratic).
         double best_w = 0.0, best = std::numeric_limits<double>::infinity();
-        for (double w : widths) {
+        for (double w : cubic ? std::vector<double>{} : widths) {
           double err = 0.0;
           for (std::size_t i = 0; i < F.size(); ++i) {
             if (F[i] == f_lo || F[i] == *fhi) continue;  // interpolation only
@@ -113,7 +119,7 @@ Finding detect_offset_nonlinearity(Context& ctx) {
             best_w = w;
           }
         }
-        const MapFit m = fit_maps(F, A, B, best_w, f_lo, f_scale);
+        const MapFit m = fit_maps(F, A, B, best_w, f_lo, f_scale, cubic);
         std::vector<double> p(fit.pred);
         for (std::size_t t = 0; t < rec.size(); ++t) {
           const auto s = static_cast<std::size_t>(rec.seg[t]);
@@ -123,7 +129,8 @@ Finding detect_offset_nonlinearity(Context& ctx) {
         }
         return p;
       },
-      "maps with a low-load knee (width by leave-one-load-out) predict the held-out loads");
+      cubic ? "cubic maps through the four training loads predict the held-out loads"
+            : "maps with a low-load knee (width by leave-one-load-out) predict the held-out loads");
 }
 
 }  // namespace scpkit::diagnosis
