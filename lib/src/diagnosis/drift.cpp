@@ -104,8 +104,17 @@ Finding detect_drift(Context& ctx) {
   const Signature& sig = ctx.return_point.time;
   if (sig.available) {
     f.evidence += "; " + describe(sig);
-    // Readings in the same state that drift apart with time are a drift whatever the model.
-    if (sig.p_value < ctx.opt.alpha && f.gain_pct > 0.0) f.detected = true;
+    // Readings in the same state that drift apart with time are a drift whatever the model:
+    // beyond alpha / 10 with any gain, at alpha with a gain above 1 % (the outliers' tiers).
+    // At alpha alone about one clean record in a hundred passes, as the test is calibrated:
+    // on 276 clean records of both independent generators two came below 0.01 (p = 0.0064,
+    // 0.0088), the first named `drift` on a gain of 0.6 % (and in session 17 another, p =
+    // 0.0029, gain 0.4 %), while the trend's gain reached 1 % on 16 of the 276. Of 165 drift
+    // records, the one this loses (p = 0.0056, a 6 % drift gaining 0.8 %) is the only one
+    // named by the signature between alpha / 10 and alpha on a gain of 1 % or less.
+    if ((sig.p_value < ctx.opt.alpha / 10.0 && f.gain_pct > 0.0) ||
+        (sig.p_value < ctx.opt.alpha && f.gain_pct > 1.0))
+      f.detected = true;
   }
   return f;
 }
