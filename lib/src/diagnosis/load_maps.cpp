@@ -83,7 +83,9 @@ Finding detect_offset_nonlinearity(Context& ctx) {
   const bool cubic = distinct.size() == 5;
   const auto [flo, fhi] = std::minmax_element(rec.seg_load.begin(), rec.seg_load.end());
   const double f_lo = *flo, f_scale = *fhi - *flo;
-  const std::vector<double> widths = {0.0, 0.08, 0.15, 0.3};
+  // The knee widths to choose from (none at five loads).
+  const std::vector<double> widths =
+      cubic ? std::vector<double>{} : std::vector<double>{0.0, 0.08, 0.15, 0.3};
   return model_finding(
       ctx, "offset_nonlinearity",
       cubic ? "augmented baseline with cubic maps f1, f2 (five loads)"
@@ -99,7 +101,7 @@ Finding detect_offset_nonlinearity(Context& ctx) {
         }
         // The knee width by leave-one-load-out over the training loads (0 = quadratic).
         double best_w = 0.0, best = std::numeric_limits<double>::infinity();
-        for (double w : cubic ? std::vector<double>{} : widths) {
+        for (double w : widths) {
           double err = 0.0;
           for (std::size_t i = 0; i < F.size(); ++i) {
             if (F[i] == f_lo || F[i] == *fhi) continue;  // interpolation only
