@@ -436,6 +436,24 @@ TEST(Diagnose, OffsetNonlinearityAtFiveLoadsByCubicMaps) {
   }
 }
 
+// Below five loads the training loads determine the quadratic maps exactly, so no map beyond
+// them can be held out; what the maps miss at a held-out load is then an affine map of H
+// within its segment, and offset_nonlinearity is named by that signature when the residuals
+// are material (before, these were `unexplained`). Clean records at four loads stay `none`.
+TEST(Diagnose, OffsetNonlinearityAtFourLoadsBySignature) {
+  for (const std::vector<double>& loads :
+       {std::vector<double>{30, 55, 80, 100}, {80, 30, 100, 50}}) {
+    const auto four = [&](RigSpec& r) { r.voltage.loads_g = loads; };
+    expect_named("voltage", "offset_nonlinearity", {2, 5}, four, [](const Diagnosis& d) {
+      const Finding& f = finding(d, "offset_nonlinearity");
+      EXPECT_TRUE(f.tested);
+      EXPECT_GT(f.score, 0.6);
+      EXPECT_NE(f.evidence.find("named by this signature alone"), std::string::npos);
+    });
+    expect_named("voltage", "none", {0, 1, 2}, four);
+  }
+}
+
 TEST(Diagnose, TheDriftExtensionGainsOnHeldOutData) {
   const testing::Scenario s = make_scenario("load", "drift", 2);
   const Diagnosis d = testing::diagnose_scenario(s);
