@@ -249,6 +249,9 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
       f.detected = true;
       f.evidence += "; named by this signature alone: " + why;
       d.cause = f.effect;
+      // The note explains `none` and `unexplained` ("no named effect explains it"); a named
+      // cause carries its reason in its finding, as when named by its extension's gain.
+      d.cause_note.clear();
     }
   };
   const auto& rp = ctx.return_point.running_max;
