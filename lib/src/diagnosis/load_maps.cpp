@@ -5,11 +5,11 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <random>
 #include <set>
 
 #include "detectors.hpp"
 #include "scpkit/hysteresis/preisach.hpp"
+#include "stats.hpp"
 
 namespace scpkit::diagnosis {
 namespace {
@@ -38,7 +38,7 @@ void centre_per_segment(const Record& rec, Eigen::MatrixXd& X) {
 
 // The share of the scored residuals' sum of squares that an affine map of H within each
 // held-out segment explains (least squares of r on [1, h] per segment, about zero).
-double segment_map_share(const Context& ctx, const std::vector<double>& r) {
+double segment_map_share(const Context& ctx, const Eigen::VectorXd& r) {
   struct Sums {
     double n = 0, h = 0, hh = 0, r = 0, hr = 0;
   };
@@ -47,13 +47,14 @@ double segment_map_share(const Context& ctx, const std::vector<double>& r) {
   for (std::size_t i = 0; i < ctx.scored.size(); ++i) {
     const std::size_t t = ctx.scored[i];
     const double h = ctx.by_fold[static_cast<std::size_t>(ctx.rec.fold[t])].h[t];
+    const double ri = r[static_cast<Eigen::Index>(i)];
     Sums& s = by_seg[ctx.rec.seg[t]];
     s.n += 1.0;
     s.h += h;
     s.hh += h * h;
-    s.r += r[i];
-    s.hr += h * r[i];
-    total += r[i] * r[i];
+    s.r += ri;
+    s.hr += h * ri;
+    total += ri * ri;
   }
   double explained = 0.0;
   for (const auto& [seg, s] : by_seg) {
@@ -79,25 +80,16 @@ double segment_map_share(const Context& ctx, const std::vector<double>& r) {
 Finding few_loads_signature(Context& ctx, std::size_t loads) {
   Finding f = not_tested(ctx, "offset_nonlinearity",
                          "needs five or more loads to fit and hold out a map beyond quadratic");
-  std::vector<double> r;
-  for (std::size_t t : ctx.scored) r.push_back(ctx.r[t]);
+  Eigen::VectorXd r(static_cast<Eigen::Index>(ctx.scored.size()));
+  for (std::size_t i = 0; i < ctx.scored.size(); ++i)
+    r[static_cast<Eigen::Index>(i)] = ctx.r[ctx.scored[i]];
   if (r.size() < 20) return f;
   f.tested = true;
   f.score = segment_map_share(ctx, r);
-  const std::size_t block = std::max<std::size_t>(4, r.size() / 24);
-  std::vector<std::size_t> starts;
-  for (std::size_t s = 0; s < r.size(); s += block) starts.push_back(s);
-  int exceed = 0;
-  std::vector<double> perm;
-  for (int i = 0; i < ctx.opt.permutations; ++i) {
-    std::shuffle(starts.begin(), starts.end(), ctx.rng);
-    perm.clear();
-    for (std::size_t s : starts) {
-      for (std::size_t j = s; j < std::min(s + block, r.size()); ++j) perm.push_back(r[j]);
-    }
-    if (segment_map_share(ctx, perm) >= f.score) ++exceed;
-  }
-  f.p_value = (1.0 + exceed) / (1.0 + ctx.opt.permutations);
+  const std::size_t block = std::max<std::size_t>(4, ctx.scored.size() / 24);
+  f.p_value =
+      block_permutation_p(r, f.score, block, ctx.opt.permutations, ctx.rng,
+                          [&](const Eigen::VectorXd& p) { return segment_map_share(ctx, p); });
   f.extended_model = "none fitted: quadratic maps through the training loads are exact";
   f.evidence = fmt::format(
       "with {} loads the maps beyond quadratic cannot be held out; an affine map of H within "

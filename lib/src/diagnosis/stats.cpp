@@ -53,16 +53,12 @@ double r_squared(const Eigen::VectorXd& r, const Eigen::MatrixXd& X) {
   return ss_tot > 0.0 ? std::max(0.0, 1.0 - ss_res / ss_tot) : 0.0;
 }
 
-double block_permutation_p(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, double r2,
-                           std::size_t block, int permutations, std::mt19937_64& rng) {
+double block_permutation_p(const Eigen::VectorXd& r, double observed, std::size_t block,
+                           int permutations, std::mt19937_64& rng,
+                           const std::function<double(const Eigen::VectorXd&)>& statistic) {
   const auto n = static_cast<std::size_t>(r.size());
   std::vector<std::size_t> starts;
   for (std::size_t s = 0; s < n; s += block) starts.push_back(s);
-  // The projection onto [1, X] is computed once; each permutation costs one product.
-  Eigen::MatrixXd A(r.size(), X.cols() + 1);
-  A.col(0).setOnes();
-  A.rightCols(X.cols()) = X;
-  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
   int exceed = 0;
   Eigen::VectorXd perm(r.size());
   for (int i = 0; i < permutations; ++i) {
@@ -72,12 +68,23 @@ double block_permutation_p(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, d
       for (std::size_t t = s; t < std::min(s + block, n); ++t)
         perm[k++] = r[static_cast<Eigen::Index>(t)];
     }
-    const double ss_res = (perm - A * qr.solve(perm)).squaredNorm();
-    const double ss_tot = (perm.array() - perm.mean()).square().sum();
-    const double stat = ss_tot > 0.0 ? 1.0 - ss_res / ss_tot : 0.0;
-    exceed += stat >= r2 ? 1 : 0;
+    exceed += statistic(perm) >= observed ? 1 : 0;
   }
   return (1.0 + exceed) / (1.0 + permutations);
+}
+
+double block_permutation_p(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, double r2,
+                           std::size_t block, int permutations, std::mt19937_64& rng) {
+  // The projection onto [1, X] is computed once; each permutation costs one product.
+  Eigen::MatrixXd A(r.size(), X.cols() + 1);
+  A.col(0).setOnes();
+  A.rightCols(X.cols()) = X;
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+  return block_permutation_p(r, r2, block, permutations, rng, [&](const Eigen::VectorXd& perm) {
+    const double ss_res = (perm - A * qr.solve(perm)).squaredNorm();
+    const double ss_tot = (perm.array() - perm.mean()).square().sum();
+    return ss_tot > 0.0 ? 1.0 - ss_res / ss_tot : 0.0;
+  });
 }
 
 double sign_flip_p(const std::vector<double>& d, int permutations, std::mt19937_64& rng) {

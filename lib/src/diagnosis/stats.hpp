@@ -3,6 +3,7 @@
 // residuals' autocorrelation (blocks of consecutive readings move as units).
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 #include <random>
 #include <span>
 #include <vector>
@@ -24,6 +25,12 @@ double r_squared(const Eigen::VectorXd& r, const Eigen::MatrixXd& X);
 /// given length) shuffled as units, X fixed.
 double block_permutation_p(const Eigen::VectorXd& r, const Eigen::MatrixXd& X, double r2,
                            std::size_t block, int permutations, std::mt19937_64& rng);
+
+/// p-value of any statistic of r (larger = stronger) against the same null: `observed` is its
+/// value on r, `statistic` is evaluated on each permutation.
+double block_permutation_p(const Eigen::VectorXd& r, double observed, std::size_t block,
+                           int permutations, std::mt19937_64& rng,
+                           const std::function<double(const Eigen::VectorXd&)>& statistic);
 
 /// One-sided p-value that the extension lowers the squared error: the per-block differences
 /// d_b = SSE_before,b - SSE_after,b (blocks of consecutive held-out readings) against random
