@@ -80,6 +80,9 @@ Finding detect_lonely_stroke(Context& ctx);
 Finding detect_noncongruence(Context& ctx);
 Finding detect_load_shape_coupling(Context& ctx);
 Finding detect_offset_nonlinearity(Context& ctx);
+/// Whether offset_nonlinearity's finding, a signature alone below five loads
+/// (few_loads_signature), is strong enough to name the cause where the residuals are material.
+bool maps_miss_by_signature(const Context& ctx, const Finding& offset);
 Finding detect_outliers(Context& ctx);
 
 }  // namespace scpkit::diagnosis

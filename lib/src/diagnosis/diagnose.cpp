@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <set>
 
 #include "baseline.hpp"
 #include "detectors.hpp"
@@ -289,15 +288,10 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   // loops whose raw p is below alpha / 10 (0.00088) has robust p 0.022.
   // Below five loads offset_nonlinearity's finding is a signature alone (few_loads_signature
   // in load_maps.cpp): the share of the held-out residuals that a per-segment affine map of H
-  // explains. Named when the residuals are material and more than 60 % of them is that
-  // (measured on 54 four-load records of the second independent generator: the five offset
-  // nonlinearities 0.99-1.00, were `unexplained`; the largest of the 41 others without a drift
-  // 0.50, on residuals below materiality; drifts 0.17-0.93, named drift where material).
-  const std::set<double> loads(rec.seg_load.begin(), rec.seg_load.end());
+  // explains, named where the residuals are material (maps_miss_by_signature).
   bool maps_miss = false;
   for (const Finding& f : d.findings) {
-    if (f.effect == "offset_nonlinearity" && f.tested && loads.size() < 5)
-      maps_miss = f.p_value < opt.alpha && f.score > 0.6;
+    if (f.effect == "offset_nonlinearity") maps_miss = maps_miss_by_signature(ctx, f);
   }
   const bool holds_move = ctx.holds.available && ctx.holds.p_value < opt.alpha;
   const bool noncongruent = ctx.congruency.available && ctx.congruency.p_value < opt.alpha / 10.0 &&
