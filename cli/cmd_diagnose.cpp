@@ -185,6 +185,7 @@ int run_diagnose(const std::vector<std::string>& args) {
                 {"baseline",
                  {{"model", d.baseline_model},
                   {"heldout_by", d.heldout_by},
+                  {"heldout_folds", d.heldout_folds},
                   {"heldout_rows", d.heldout_rows},
                   {"rms_pct_range", d.rms_pct_range},
                   {"max_pct_range", d.max_pct_range},
@@ -200,10 +201,10 @@ int run_diagnose(const std::vector<std::string>& args) {
   std::cout << fmt::format("{}: {} rows, input {}, response {}\n", m.source(), m.rows(), in.column,
                            out.column);
   std::cout << fmt::format(
-      "  baseline {}, held out by {} ({} readings scored): E_RMS {:.3f} %, E_max {:.3f} % of "
-      "range (E_RMS without the largest 5 %: {:.3f} %); noise floor {:.3f} %\n",
-      d.baseline_model, d.heldout_by, d.heldout_rows, d.rms_pct_range, d.max_pct_range,
-      d.sustained_rms_pct_range, d.noise_floor_pct_range);
+      "  baseline {}, held out by {} in {} folds ({} readings scored): E_RMS {:.3f} %, E_max "
+      "{:.3f} % of range (E_RMS without the largest 5 %: {:.3f} %); noise floor {:.3f} %\n",
+      d.baseline_model, d.heldout_by, d.heldout_folds, d.heldout_rows, d.rms_pct_range,
+      d.max_pct_range, d.sustained_rms_pct_range, d.noise_floor_pct_range);
   for (const Finding& f : d.findings) {
     if (!f.tested) {
       std::cout << fmt::format("  {:<24} not tested: {}\n", f.effect, f.evidence);

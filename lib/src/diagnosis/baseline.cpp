@@ -5,6 +5,7 @@
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <set>
 
 #include "scpkit/error.hpp"
@@ -13,8 +14,10 @@
 namespace scpkit::diagnosis {
 namespace {
 
+// Renumbers the fold ids 0, 1, ... in order; negative ids (never held out) stay as they are.
 std::vector<int> dense_ids(std::vector<int> ids) {
-  std::vector<int> sorted(ids);
+  std::vector<int> sorted;
+  std::copy_if(ids.begin(), ids.end(), std::back_inserter(sorted), [](int f) { return f >= 0; });
   std::sort(sorted.begin(), sorted.end());
   sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
   for (int& f : ids) {

@@ -107,7 +107,7 @@ Context::Context(const Record& record, const Baseline& b, const DiagnoseOptions&
     scored.push_back(t);
   }
   if (scored.size() < 20) {
-    throw IdentificationError(fmt::format(
+    throw TooFewHeldOut(fmt::format(
         "only {} held-out readings lie within the inputs their folds trained on (need >= 20): "
         "the record's extreme inputs occur in one cycle only",
         scored.size()));

@@ -10,9 +10,16 @@
 
 #include "baseline.hpp"
 #include "scpkit/diagnosis/diagnose.hpp"
+#include "scpkit/error.hpp"
 #include "signatures.hpp"
 
 namespace scpkit::diagnosis {
+
+/// Too few held-out readings lie within the inputs their folds trained on (Context).
+class TooFewHeldOut : public IdentificationError {
+ public:
+  using IdentificationError::IdentificationError;
+};
 
 struct Context {
   const Record& rec;

@@ -52,6 +52,7 @@ struct Finding {
 struct Diagnosis {
   std::string baseline_model = "preisach";
   std::string heldout_by;        ///< "cycles", "segments" or "load segments"
+  int heldout_folds = 0;         ///< folds held out in turn
   std::size_t heldout_rows = 0;  ///< readings scored out of fold
   double rms_pct_range = 0.0;    ///< baseline, held-out
   double max_pct_range = 0.0;
