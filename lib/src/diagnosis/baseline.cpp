@@ -54,8 +54,8 @@ Record make_record(const DiagnoseData& data, const DiagnoseOptions& opt) {
       (!data.load_N.empty() && data.load_N.size() != n)) {
     throw_invalid("diagnose: the columns have different lengths");
   }
-  if (n < 30)
-    throw IdentificationError(fmt::format("{} readings are too few to diagnose (need >= 30)", n));
+  if (n < 24)
+    throw IdentificationError(fmt::format("{} readings are too few to diagnose (need >= 24)", n));
   rec.u = data.input;
   rec.y = data.output;
   rec.input_is_load = data.input_is_load;
