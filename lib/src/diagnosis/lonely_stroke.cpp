@@ -109,12 +109,11 @@ Finding detect_lonely_stroke(Context& ctx) {
           }
           uniform = rising[0] > 0 && rising[1] > 0 && xr[0] * xr[1] > 0.0;
           // A class whose first rises are all held out gets no term: its sign is what the
-          // data cannot tell (paper 001 leaves the increase open), and a guessed sign costs
-          // the held-out fit twice the stroke. Measured: a fresh second-generator record, loads
-          // 120, 60, 30, 100 g, a 3 % lonely stroke of one sign; the fold holding out the one
-          // segment after an increase took paper 001's opposite sign, the term lost 530 % on
-          // held-out data and a Kelvin element was named (`creep`), although readings in one
-          // memory state differed with the running maximum at p = 2e-39.
+          // data cannot tell (paper 001 leaves the increase open). Measured: a fresh
+          // second-generator record, loads 120, 60, 30, 100 g, a 3 % lonely stroke of one sign;
+          // the fold holding out the one segment after an increase took paper 001's opposite
+          // sign and lambda m lost 530 % on held-out data; without a term there, 212 % (the
+          // offset, above); with lambda (m - m_top) as well, it gains 5.8 %.
           if (rising[0] == 0 || rising[1] == 0) untrained = rising[1] == 0 ? 1 : 0;
         }
         std::vector<Term> candidates;
