@@ -58,10 +58,10 @@ int run_predict(const std::vector<std::string>& args) {
   }
 
   std::ostringstream csv;
-  for (const auto& c : m.columns()) csv << c.name << ",";
+  for (const auto& c : m.columns()) csv << csv_field(c.name) << ",";
   csv << predicted_name << "\n";
   for (std::size_t r = 0; r < m.rows(); ++r) {
-    for (const auto& c : m.columns()) csv << m.cell(r, c.position) << ",";
+    for (const auto& c : m.columns()) csv << csv_field(m.cell(r, c.position)) << ",";
     csv << csv_number(predicted_col[r]) << "\n";
   }
   if (vm.count("output")) write_file_atomically(vm["output"].as<std::string>(), csv.str());

@@ -6,6 +6,7 @@
 #include <charconv>
 #include <cmath>
 #include <set>
+#include <utility>
 
 #include "scpkit/error.hpp"
 #include "scpkit/io/atomic_file.hpp"
@@ -61,6 +62,51 @@ std::string_view trim(std::string_view s) {
   while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
   while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
   return s;
+}
+
+/// The fields of one line and the 1-based character column where each starts. A field may be
+/// quoted as RFC 4180 has it ("load_g", "a, b", "say ""x""": spreadsheets and CSV writers quote
+/// when told to); a quoted field does not span lines.
+std::pair<std::vector<std::string>, std::vector<int>> split_fields(std::string_view line,
+                                                                   const std::string& source,
+                                                                   int line_no) {
+  std::vector<std::string> fields;
+  std::vector<int> starts;
+  std::size_t f0 = 0;
+  while (true) {
+    starts.push_back(static_cast<int>(f0) + 1);
+    std::size_t comma = line.find(',', f0);
+    const std::size_t open = line.find_first_not_of(" \t", f0);
+    if (open != std::string_view::npos && line[open] == '"' && open < comma) {
+      std::string text;
+      std::size_t i = open + 1;
+      for (;; ++i) {
+        if (i >= line.size())
+          throw InputError(source, line_no, static_cast<int>(open) + 1,
+                           "a quoted field has no closing quote on its line");
+        if (line[i] != '"') {
+          text += line[i];
+        } else if (i + 1 < line.size() && line[i + 1] == '"') {
+          text += '"';
+          ++i;
+        } else {
+          break;
+        }
+      }
+      comma = line.find(',', i + 1);
+      const std::size_t f1 = comma == std::string_view::npos ? line.size() : comma;
+      if (!trim(line.substr(i + 1, f1 - i - 1)).empty())
+        throw InputError(source, line_no, static_cast<int>(i) + 2,
+                         "text after the closing quote of a quoted field");
+      fields.push_back(std::move(text));
+    } else {
+      const std::size_t f1 = comma == std::string_view::npos ? line.size() : comma;
+      fields.emplace_back(trim(line.substr(f0, f1 - f0)));
+    }
+    if (comma == std::string_view::npos) break;
+    f0 = comma + 1;
+  }
+  return {std::move(fields), std::move(starts)};
 }
 
 const char* quantity_word(Quantity q) {
@@ -134,18 +180,7 @@ Measurement Measurement::parse(std::string_view text, const std::string& source)
       if (end == text.size()) break;
       continue;
     }
-    // Split into fields, remembering where each starts (1-based character column).
-    std::vector<std::string> fields;
-    std::vector<int> starts;
-    std::size_t f0 = 0;
-    while (true) {
-      const std::size_t comma = line.find(',', f0);
-      const std::size_t f1 = comma == std::string_view::npos ? line.size() : comma;
-      fields.emplace_back(trim(line.substr(f0, f1 - f0)));
-      starts.push_back(static_cast<int>(f0) + 1);
-      if (comma == std::string_view::npos) break;
-      f0 = comma + 1;
-    }
+    auto [fields, starts] = split_fields(line, source, line_no);
     if (!have_header) {
       have_header = true;
       m.header_line_ = line_no;
@@ -368,5 +403,17 @@ std::string display_unit(const std::string& n) {
 }
 
 double display_scale(const std::string& n) { return n == "strain" ? 100.0 : 1.0; }
+
+std::string csv_field(const std::string& text) {
+  const bool blank_edge = !text.empty() && (text.front() == ' ' || text.front() == '\t' ||
+                                            text.back() == ' ' || text.back() == '\t');
+  if (!blank_edge && text.find_first_of(",\"") == std::string::npos) return text;
+  std::string q = "\"";
+  for (char c : text) {
+    if (c == '"') q += '"';
+    q += c;
+  }
+  return q + '"';
+}
 
 }  // namespace scpkit

@@ -49,7 +49,7 @@ class Measurement {
   const std::vector<MeasurementColumn>& columns() const { return columns_; }
   /// The column holding a quantity, or nullptr.
   const MeasurementColumn* find(Quantity q) const;
-  /// Raw text of a cell (for echoing unknown columns).
+  /// Text of a cell, unquoted (for echoing unknown columns; csv_field quotes it again).
   const std::string& cell(std::size_t row, int position) const { return cells_[row][position]; }
   int header_line() const { return header_line_; }
   int line_of_row(std::size_t row) const { return row_lines_[row]; }
@@ -94,5 +94,8 @@ Signal select_response(const Measurement& m, const std::string& wanted = "");
 std::string display_unit(const std::string& canonical_name);
 /// Factor from canonical to display units (strain fraction -> %, others 1).
 double display_scale(const std::string& canonical_name);
+/// A cell as a CSV field that Measurement::parse reads back as `text`: quoted (RFC 4180) when
+/// it holds a comma, a quote or surrounding blanks, else as it is.
+std::string csv_field(const std::string& text);
 
 }  // namespace scpkit
