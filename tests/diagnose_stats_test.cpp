@@ -16,6 +16,32 @@
 namespace scpkit::diagnosis {
 namespace {
 
+TEST(RobustStatistics, MedianAndMadAreOddUnderNegationAndExact) {
+  EXPECT_DOUBLE_EQ(median({3.0, 1.0, 2.0}), 2.0);
+  EXPECT_DOUBLE_EQ(median({4.0, 1.0, 3.0, 2.0}), 2.5);
+  EXPECT_DOUBLE_EQ(median({5.0, 7.0}), 6.0);  // two hold-mates: between them, not the higher
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> g(0.3, 2.0);
+  for (int n = 1; n <= 40; ++n) {
+    std::vector<double> v(static_cast<std::size_t>(n)), neg(v.size()), shifted(v.size());
+    for (double& x : v) x = g(rng);
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      neg[i] = -v[i];
+      shifted[i] = 2.5 * v[i] + 7.0;
+    }
+    // Independently: sort, and take the middle one or the mean of the middle two.
+    std::vector<double> s = v;
+    std::sort(s.begin(), s.end());
+    const std::size_t h = s.size() / 2;
+    const double expect = s.size() % 2 ? s[h] : 0.5 * (s[h - 1] + s[h]);
+    EXPECT_DOUBLE_EQ(median(v), expect) << n;
+    EXPECT_DOUBLE_EQ(median(neg), -median(v)) << n;
+    EXPECT_NEAR(median(shifted), 2.5 * median(v) + 7.0, 1e-12) << n;
+    EXPECT_DOUBLE_EQ(mad(neg), mad(v)) << n;
+    EXPECT_NEAR(mad(shifted), 2.5 * mad(v), 1e-12) << n;
+  }
+}
+
 TEST(SignFlip, ExactWhenFewBlocks) {
   std::mt19937_64 rng(1);
   // Five blocks that all gain: only the observed signs reach the observed rank sum: 1 / 2^5.

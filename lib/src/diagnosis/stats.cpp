@@ -11,7 +11,11 @@ double median(std::vector<double> v) {
   if (v.empty()) return 0.0;
   const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
   std::nth_element(v.begin(), mid, v.end());
-  return *mid;
+  if (v.size() % 2 == 1) return *mid;
+  // An even count: the mean of the two middle values, so that median(-v) = -median(v) (the
+  // upper one alone made a spike among two hold-mates count from the higher of them, and every
+  // robust scale differ with the response's sign convention).
+  return 0.5 * (*std::max_element(v.begin(), mid) + *mid);
 }
 
 double mad(const std::vector<double>& v) {

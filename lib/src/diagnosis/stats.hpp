@@ -10,7 +10,7 @@
 
 namespace scpkit::diagnosis {
 
-double median(std::vector<double> v);
+double median(std::vector<double> v);      ///< of an even count, the mean of the middle two
 double mad(const std::vector<double>& v);  ///< 1.4826 median |v - median| (sigma if Gaussian)
 double rms(std::span<const double> e);
 
