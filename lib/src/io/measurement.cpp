@@ -405,8 +405,7 @@ std::string display_unit(const std::string& n) {
 double display_scale(const std::string& n) { return n == "strain" ? 100.0 : 1.0; }
 
 std::string csv_field(const std::string& text) {
-  const bool blank_edge = !text.empty() && (text.front() == ' ' || text.front() == '\t' ||
-                                            text.back() == ' ' || text.back() == '\t');
+  const bool blank_edge = trim(text).size() != text.size();  // the reader would trim them
   if (!blank_edge && text.find_first_of(",\"") == std::string::npos) return text;
   std::string q = "\"";
   for (char c : text) {
