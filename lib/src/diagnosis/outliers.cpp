@@ -32,7 +32,10 @@ bool same_hold(const Record& rec, std::size_t a, std::size_t b) {
 /// a fresh independent-generator record was named `outliers`.)
 class ProtocolPoints {
  public:
-  ProtocolPoints(const Record& rec, const std::vector<std::size_t>& rows) : key_(rec.size()) {
+  /// `by_running_max`: whether the key holds the running maximum (the comparison on the
+  /// readings themselves, which asks that a reading stand alone, leaves it out; below).
+  ProtocolPoints(const Record& rec, const std::vector<std::size_t>& rows, bool by_running_max)
+      : key_(rec.size()) {
     const std::vector<std::vector<long>> states = memory_states(rec);
     const auto [umin, umax] = std::minmax_element(rec.u.begin(), rec.u.end());
     const double span = std::max(*umax - *umin, 1e-300);
@@ -44,7 +47,7 @@ class ProtocolPoints {
       const bool held = t > 0 && same_hold(rec, t - 1, t);
       in_hold = held ? in_hold + 1 : 0;
       key_[t] = states[t];
-      key_[t].push_back(std::lround((running_max - *umin) / span * 1e7));
+      if (by_running_max) key_[t].push_back(std::lround((running_max - *umin) / span * 1e7));
       key_[t].push_back(in_hold);
     }
     for (std::size_t t : rows) points_[key_[t]].push_back(t);
@@ -74,14 +77,15 @@ class ProtocolPoints {
 };
 
 /// The scatter of deviations from their squares `sq`, blind to the few that are spikes: the
-/// RMS without the largest 5 %, over 0.871 (its ratio to sigma for a normal).
-double trimmed_sigma(std::vector<double> sq) {
+/// RMS without the largest 1 / `drop_one_in` of them, over `ratio` (that RMS's ratio to sigma
+/// for a normal: 0.871 without the largest 5 %, 0.662 without the largest 20 %).
+double trimmed_sigma(std::vector<double> sq, std::size_t drop_one_in = 20, double ratio = 0.871) {
   std::sort(sq.begin(), sq.end());
-  const std::size_t keep = sq.size() - sq.size() / 20;
+  const std::size_t keep = sq.size() - sq.size() / drop_one_in;
   const double mean_sq =
       std::accumulate(sq.begin(), sq.begin() + static_cast<std::ptrdiff_t>(keep), 0.0) /
       static_cast<double>(keep);
-  return std::sqrt(mean_sq) / 0.871;
+  return std::sqrt(mean_sq) / ratio;
 }
 
 /// Spikes among the readings of one hold (the same input in one segment, read more than once;
@@ -245,7 +249,7 @@ Finding detect_outliers(Context& ctx) {
   std::vector<double> z(n, 0.0);
   for (std::size_t i = 0; i < screened.size(); ++i)
     z[screened[i]] = std::abs(spike[i] - med) / scale;
-  const ProtocolPoints points(rec, screened);
+  const ProtocolPoints points(rec, screened, true);
   std::vector<double> deviation(n, none), compared;
   for (std::size_t t : screened) {
     deviation[t] = points.deviation(res, t);
@@ -257,23 +261,35 @@ Finding detect_outliers(Context& ctx) {
   // scale is the readings' own scatter, not the baseline's misfit, which on a coarse
   // baseline (L = 8 on a damped protocol, its misfit six times the noise) hid spikes of 25
   // noise sigmas (measured on the independent generator: 5-10 % spikes scoring 3.7-3.9 off
-  // their neighbours, below kCandidate). Scale: the RMS of the deviations without their
-  // largest 5 %, over 0.871 (its ratio to sigma for a normal); at least half a sensor step
-  // (readings of one true value round alike, so a step is rare but not a spike) and 1e-4 of
-  // the range.
+  // their neighbours, below kCandidate). Every reading takes part, the first rise of a load
+  // test too (never scored, but a measurement: a spike on the last cycle's rise is compared
+  // with the first's), and the points are the memory states alone, without the running
+  // maximum: a lonely stroke, or a first rise from a bottom that does not clear every hysteron
+  // (the rig's 20 g), moves a stretch of the rise, the reading's neighbours with it, which
+  // standing alone (below) does not let through. (Measured on the independent generator's
+  // damped protocols, whose only repeated rise is the first: spikes of 5 and 10 % of the range
+  // on the last rise, 4.9 and 6.8 robust sigmas off their neighbours, had no other reading at
+  // their point and were named `none`.) Scale: the RMS of the deviations without their
+  // largest 20 %, over 0.662 (its ratio to sigma for a normal): a spike met by one other
+  // reading puts two large deviations among a few dozen, and without the largest 5 % the
+  // scale of a rig record with two 5 % spikes on its last rise was seven times its clean
+  // value; at least half a sensor step (readings of one true value round alike, so a step is
+  // rare but not a spike) and 1e-4 of the range.
+  std::vector<std::size_t> every(n);
+  std::iota(every.begin(), every.end(), std::size_t{0});
+  const ProtocolPoints alike(rec, every, false);
   std::vector<double> dev(n, none);  // NaN: tests at several loads, or no other reading there
-  for (std::size_t t : screened) {
-    if (!rec.several_loads) dev[t] = points.deviation(rec.y, t);
-  }
+  for (std::size_t t = 0; t < n && !rec.several_loads; ++t) dev[t] = alike.deviation(rec.y, t);
   const std::vector<double> off_alone = [&] {
     std::vector<double> off(n, 0.0);
     if (rec.several_loads) return off;
     std::vector<double> sq;
-    for (std::size_t t : screened) {
-      if (!std::isnan(dev[t])) sq.push_back(dev[t] * dev[t]);
+    for (double d : dev) {
+      if (!std::isnan(d)) sq.push_back(d * d);
     }
     if (sq.size() < 20) return off;
-    const double y_scale = std::max({trimmed_sigma(sq), 0.5 * ctx.resolution, 1e-4 * rec.range});
+    const double y_scale =
+        std::max({trimmed_sigma(sq, 5, 0.662), 0.5 * ctx.resolution, 1e-4 * rec.range});
     for (std::size_t t : screened) {
       if (std::isnan(dev[t]) || std::abs(dev[t]) <= kAlone * y_scale || z[t] < kAside) continue;
       // Alone: the neighbours are where they are elsewhere (a drift or a changed loop moves
@@ -283,7 +299,7 @@ Finding detect_outliers(Context& ctx) {
         if (nb < n && !std::isnan(dev[nb]) && std::abs(dev[nb]) > 0.5 * kAlone * y_scale)
           alone = false;
       }
-      const std::size_t other = points.twin(t);
+      const std::size_t other = alike.twin(t);
       if (alone && (other == t || z[t] > z[other])) off[t] = std::abs(dev[t]) / y_scale;
     }
     return off;
