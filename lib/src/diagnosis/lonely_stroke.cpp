@@ -4,6 +4,7 @@
 
 #include <Eigen/QR>
 #include <algorithm>
+#include <utility>
 
 #include "detectors.hpp"
 
