@@ -68,6 +68,17 @@ struct Diagnosis {
   std::string cause_note;  ///< why `none` or `unexplained`, where it is not plain
 };
 
+/// The baseline's identification options: those of `scpkit fit` but for the smoothness
+/// candidates, which leave out 0. An unregularised fit on a fine grid is ill-conditioned, and
+/// its held-out error follows round-off: cross-validation chose between it and a smoothed fit
+/// on the last digits, so the same record in other units, or shifted by 1e-9 of itself, got
+/// another baseline and, once, another cause (docs/diagnose.md, sessions 24 and 25).
+inline PreisachFitOptions diagnose_baseline_options() {
+  PreisachFitOptions o;
+  o.candidate_smoothness = {1e-6, 1e-5, 1e-4, 1e-3};
+  return o;
+}
+
 struct DiagnoseOptions {
   int folds = 5;
   int permutations = 999;     ///< resampling tests: p resolves 0.001, well below alpha
@@ -76,7 +87,7 @@ struct DiagnoseOptions {
   double min_gain_pct = 5.0;  ///< an extension must gain at least this on held-out data
   std::uint64_t seed = 1;
   /// How the baseline is identified: L and smoothness chosen by cross-validation unless set.
-  PreisachFitOptions baseline;
+  PreisachFitOptions baseline = diagnose_baseline_options();
 };
 
 /// What diagnose reads from a measurement.
