@@ -2,7 +2,6 @@
 // 4).
 #include <fmt/format.h>
 
-#include <Eigen/QR>
 #include <algorithm>
 #include <utility>
 
@@ -17,24 +16,21 @@ namespace {
 /// record at four loads took the kept form in one fold and lost 217 % on held-out data.)
 double offset_map_misfit(const Record& rec, const FoldFit& fit) {
   const auto [flo, fhi] = std::minmax_element(rec.seg_load.begin(), rec.seg_load.end());
-  const double scale = std::max(*fhi - *flo, 1e-300);
-  std::vector<double> x, a;
+  std::vector<double> F, a, b;
   for (std::size_t s = 0; s < rec.seg_first.size(); ++s) {
     if (!fit.free[s]) continue;
-    x.push_back((rec.seg_load[s] - *flo) / scale);
+    F.push_back(rec.seg_load[s]);
     a.push_back(fit.a[s]);
+    b.push_back(fit.b[s]);
   }
-  if (x.size() < 4) return 0.0;
-  const auto rows = static_cast<Eigen::Index>(x.size());
-  Eigen::MatrixXd A(rows, 3);
-  Eigen::VectorXd v(rows);
-  for (Eigen::Index i = 0; i < rows; ++i) {
-    const double xi = x[static_cast<std::size_t>(i)];
-    A.row(i) << 1.0, xi, xi * xi;
-    v[i] = a[static_cast<std::size_t>(i)];
+  if (F.size() < 4) return 0.0;
+  const MapFit maps = fit_maps(F, a, b, 0.0, *flo, *fhi - *flo);
+  double ss = 0.0;
+  for (std::size_t i = 0; i < F.size(); ++i) {
+    const double r = a[i] - maps.eval(maps.coef_a, F[i]);
+    ss += r * r;
   }
-  const Eigen::VectorXd c = A.colPivHouseholderQr().solve(v);
-  return (A * c - v).squaredNorm();
+  return ss;
 }
 
 }  // namespace
