@@ -293,5 +293,43 @@ TEST(IdentifiedReadings, PairsTraversedByTheOtherFolds) {
   EXPECT_GT(held_out, 100);
 }
 
+// Inputs read along ramps finer than the baseline's grid: a pair is observed only within the
+// record's own input step, not within half a coarse cell (an Everett value moves by several %
+// of the range over half a cell). The excursion's reversal at 3/32 is met once; at L = 4 its
+// pair (3/32, 2/32) lies on one node and counted as observed before.
+TEST(IdentifiedReadings, PairsOnTheRecordsOwnInputSteps) {
+  DiagnoseData data;
+  const int cycles = 10, excursion_cycle = 6, steps = 32;
+  std::size_t lonely = 0;
+  data.input.push_back(0.0);
+  for (int c = 0; c < cycles; ++c) {
+    for (int k = 1; k <= steps; ++k) data.input.push_back(k / static_cast<double>(steps));
+    for (int k = steps - 1; k >= 0; --k) data.input.push_back(k / static_cast<double>(steps));
+    if (c == excursion_cycle) {
+      data.input.insert(data.input.end(), {1.0 / 32, 2.0 / 32, 3.0 / 32, 2.0 / 32});
+      lonely = data.input.size() - 1;
+      data.input.push_back(1.0 / 32);
+      data.input.push_back(0.0);
+    }
+  }
+  std::mt19937 rng(5);
+  std::normal_distribution<double> N(0.0, 0.01);
+  for (double u : data.input) data.output.push_back(u * u + N(rng));
+  const Record rec = make_record(data, DiagnoseOptions{});
+  ASSERT_GE(rec.fold[lonely], 0);  // held out
+  EXPECT_DOUBLE_EQ(input_steps(rec), 32.0);
+  const std::vector<char> id = identified_readings(rec, 4);
+  EXPECT_FALSE(id[lonely]);
+  int identified = 0, held_out = 0;
+  for (std::size_t t = 0; t < rec.size(); ++t) {
+    if (rec.fold[t] < 0) continue;
+    ++held_out;
+    identified += id[t] ? 1 : 0;
+  }
+  // Every held-out reading of the ordinary cycles is observed by the others' same branches.
+  EXPECT_GE(identified, held_out - 3);
+  EXPECT_GT(held_out, 500);
+}
+
 }  // namespace
 }  // namespace scpkit::diagnosis

@@ -64,6 +64,21 @@ class ProtocolPoints {
     if (others.empty()) return std::numeric_limits<double>::quiet_NaN();
     return r[t] - median(others);
   }
+  /// Whether another reading at t's protocol point stands off the median of t's others (the
+  /// one deviation(r, t) is taken from) the same way as t, by at least half as much: then t's
+  /// deviation repeats there, as a rate or history effect's does, which a spike's never does.
+  bool shared(const std::vector<double>& r, std::size_t t) const {
+    std::vector<double> others;
+    for (std::size_t s : points_.at(key_[t])) {
+      if (s != t) others.push_back(r[s]);
+    }
+    if (others.size() < 2) return false;
+    const double m = median(others), d = r[t] - m;
+    for (double v : others) {
+      if ((v - m) * d > 0.0 && std::abs(v - m) >= 0.5 * std::abs(d)) return true;
+    }
+    return false;
+  }
   /// The other reading at t's protocol point when there is exactly one; t otherwise.
   std::size_t twin(std::size_t t) const {
     const std::vector<std::size_t>& p = points_.at(key_[t]);
@@ -300,7 +315,8 @@ Finding detect_outliers(Context& ctx) {
           alone = false;
       }
       const std::size_t other = alike.twin(t);
-      if (alone && (other == t || z[t] > z[other])) off[t] = std::abs(dev[t]) / y_scale;
+      if (alone && (other == t || z[t] > z[other]) && !alike.shared(rec.y, t))
+        off[t] = std::abs(dev[t]) / y_scale;
     }
     return off;
   }();

@@ -65,51 +65,70 @@ std::vector<std::vector<long>> memory_states(const Record& rec) {
 std::vector<char> identified_readings(const Record& rec, int levels) {
   const auto [umin, umax] = std::minmax_element(rec.u.begin(), rec.u.end());
   const double lo = *umin, span = std::max(*umax - *umin, 1e-300);
-  const auto node = [&](double v) { return std::lround((v - lo) / span * levels); };
-  const long bottom = 0;
+  // Two inputs are one node when within half a cell of each other.
+  const double tol = 0.5 * span / std::max(static_cast<double>(levels), input_steps(rec));
   const PreisachGrid grid{lo, lo + span, 1};
-  // Per reading: the pairs its value rests on (node pairs, lower first) and the pair its branch
-  // observes.
-  std::vector<std::vector<std::pair<long, long>>> needs(rec.size());
-  std::vector<std::pair<long, long>> sees(rec.size());
-  const auto ordered = [](long a, long b) {
+  // Per reading: the pairs its value rests on (lower first) and the pair its branch observes.
+  using Pair = std::pair<double, double>;
+  std::vector<std::vector<Pair>> needs(rec.size());
+  std::vector<Pair> sees(rec.size());
+  const auto ordered = [](double a, double b) {
     return std::make_pair(std::min(a, b), std::max(a, b));
   };
   PreisachState state = PreisachState::negative_saturation(grid);
-  long top = 0;
+  double top = lo;
   for (std::size_t t = 0; t < rec.size(); ++t) {
     if (t == 0 || rec.seg[t] != rec.seg[t - 1]) {
       state = PreisachState::negative_saturation(grid);
-      top = 0;
+      top = lo;
       for (std::size_t s = t; s < rec.size() && rec.seg[s] == rec.seg[t]; ++s)
-        top = std::max(top, node(rec.u[s]));
+        top = std::max(top, rec.u[s]);
     }
     state.apply(rec.u[t]);
     const auto tp = state.turning_points();
-    std::vector<long> x{bottom};
-    for (double p : tp) x.push_back(node(p));
+    std::vector<double> x{lo};
+    x.insert(x.end(), tp.begin(), tp.end());
     // The branch's pair: its starting turning point (the lowest input on the first rise) and
     // the input; none back at negative saturation, where the memory holds no turning point.
-    sees[t] = x.size() >= 2 ? ordered(x[x.size() - 2], x.back()) : ordered(bottom, bottom);
-    if (x.size() >= 2 && x[1] == top) x.erase(x.begin());
+    sees[t] = x.size() >= 2 ? ordered(x[x.size() - 2], x.back()) : ordered(lo, lo);
+    if (x.size() >= 2 && x[1] >= top - tol) x.erase(x.begin());
     for (std::size_t i = 0; i + 1 < x.size(); ++i) {
-      if (x[i] != x[i + 1]) needs[t].push_back(ordered(x[i], x[i + 1]));
+      if (std::abs(x[i] - x[i + 1]) > tol) needs[t].push_back(ordered(x[i], x[i + 1]));
     }
   }
-  std::vector<std::set<std::pair<long, long>>> seen(static_cast<std::size_t>(rec.folds));
+  std::vector<std::set<Pair>> seen(static_cast<std::size_t>(rec.folds));
   for (std::size_t t = 0; t < rec.size(); ++t) {
     for (int k = 0; k < rec.folds; ++k) {
       if (rec.trains(t, k)) seen[static_cast<std::size_t>(k)].insert(sees[t]);
     }
   }
+  const auto observed = [tol](const std::set<Pair>& s, const Pair& p) {
+    for (auto it = s.lower_bound({p.first - tol, -HUGE_VAL});
+         it != s.end() && it->first <= p.first + tol; ++it) {
+      if (std::abs(it->second - p.second) <= tol) return true;
+    }
+    return false;
+  };
   std::vector<char> out(rec.size(), 0);
   for (std::size_t t = 0; t < rec.size(); ++t) {
     if (rec.fold[t] < 0) continue;
     const auto& s = seen[static_cast<std::size_t>(rec.fold[t])];
     out[t] = std::all_of(needs[t].begin(), needs[t].end(),
-                         [&](const std::pair<long, long>& p) { return s.count(p) > 0; });
+                         [&](const Pair& p) { return observed(s, p); });
   }
   return out;
+}
+
+double input_steps(const Record& rec) {
+  const auto [umin, umax] = std::minmax_element(rec.u.begin(), rec.u.end());
+  const double span = *umax - *umin;
+  std::vector<double> steps;
+  for (std::size_t t = 1; t < rec.size(); ++t) {
+    const double d = std::abs(rec.u[t] - rec.u[t - 1]);
+    if (d > 1e-9 * span && rec.seg[t] == rec.seg[t - 1]) steps.push_back(d);
+  }
+  if (steps.empty() || !(span > 0.0)) return 1.0;
+  return std::round(span / median(steps));
 }
 
 namespace {
