@@ -66,7 +66,10 @@
 #   (seed 203, a first-order lag read every 4 s, repeated major and minor loops), named
 #   `outliers` while a reading off its protocol point counted as a spike although the other
 #   returns of the same minor loop stood off it the same way (its lag, 5.6 scales off the
-#   first visits there): any cause but `outliers`.
+#   first visits there): any cause but `outliers`. And two spikes of 10 and 15 % on short
+#   records read along ramps (seeds 301 and 302, 39 and 53 ramp readings, L = 8 and 12, the
+#   baseline's held-out misfit 3-4 times the noise), named `none` before a reading that breaks
+#   a monotone branch was compared with its neighbours on the readings themselves (`outliers`).
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -103,6 +106,7 @@ python3 "$src/scripts/independent_cases_b.py" "$work/b" 1 403 voltage-offset_non
 python3 "$src/scripts/independent_cases.py" "$work/fresh" 2 3801 load-outliers || exit 1
 python3 "$src/scripts/independent_cases_c.py" "$work/c" 2 102 load-none || exit 1
 python3 "$src/scripts/independent_cases_c.py" "$work/c" 1 203 load-creep || exit 1
+python3 "$src/scripts/independent_cases_c.py" "$work/c" 2 301 load-outliers || exit 1
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -150,5 +154,7 @@ expect "$work/fresh/load-outliers-3802.csv" outliers
 expect "$work/c/load-none-102.csv" none
 expect "$work/c/load-none-103.csv" none
 expect_not "$work/c/load-creep-203.csv" outliers
+expect "$work/c/load-outliers-301.csv" outliers
+expect "$work/c/load-outliers-302.csv" outliers
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]
