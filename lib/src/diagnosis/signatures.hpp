@@ -44,13 +44,14 @@ std::vector<std::vector<long>> memory_states(const Record& rec);
 /// operator's output is a sum of Everett values, one per pair of consecutive dominant turning
 /// points (the current input last), and the training readings on a branch observe the pair of
 /// its starting turning point and their input. A held-out reading is identified when every
-/// pair of its memory, on the nodes of a grid over the inputs, was observed in its fold's
-/// training (a pair on one node contributes nothing). The grid has `levels` cells, or as many
-/// as the record's input steps (input_steps) where those are finer: inputs read along ramps
-/// (not on a grid) otherwise count pairs up to half a coarse cell apart as observed, and an
-/// Everett value moves by several % of the range over half a cell. The first rise's pair from
-/// the lowest input counts only below the segment's top (above it, every later reading shares
-/// it). Readings that are not held out are 0.
+/// pair of its memory was observed in its fold's training, both inputs within half a cell of
+/// an observed pair's (a pair whose inputs are that close contributes nothing). The cell is
+/// the range over `levels`, or over the record's input steps (input_steps) where those are
+/// finer: inputs read along ramps (not on a grid) otherwise count pairs up to half a coarse
+/// cell apart as observed, and an Everett value moves by several % of the range over half a
+/// cell. On inputs on a grid of the record's steps, equal inputs match and others do not. The first
+/// rise's pair from the lowest input counts only below the segment's top (above it, every later
+/// reading shares it). Readings that are not held out are 0.
 std::vector<char> identified_readings(const Record& rec, int levels);
 /// The input range over the median step between consecutive readings' inputs (where the input
 /// moves, within a segment), rounded: the number of input steps the record resolves.
