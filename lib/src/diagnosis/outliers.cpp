@@ -57,10 +57,7 @@ class ProtocolPoints {
   /// that t stand out from its neighbours too, and off_alone that it stand out more than the
   /// other does.)
   double deviation(const std::vector<double>& r, std::size_t t) const {
-    std::vector<double> others;
-    for (std::size_t s : points_.at(key_[t])) {
-      if (s != t) others.push_back(r[s]);
-    }
+    const std::vector<double> others = others_at(r, t);
     if (others.empty()) return std::numeric_limits<double>::quiet_NaN();
     return r[t] - median(others);
   }
@@ -68,10 +65,7 @@ class ProtocolPoints {
   /// one deviation(r, t) is taken from) the same way as t, by at least half as much: then t's
   /// deviation repeats there, as a rate or history effect's does, which a spike's never does.
   bool shared(const std::vector<double>& r, std::size_t t) const {
-    std::vector<double> others;
-    for (std::size_t s : points_.at(key_[t])) {
-      if (s != t) others.push_back(r[s]);
-    }
+    const std::vector<double> others = others_at(r, t);
     if (others.size() < 2) return false;
     const double m = median(others), d = r[t] - m;
     for (double v : others) {
@@ -87,6 +81,14 @@ class ProtocolPoints {
   }
 
  private:
+  /// r at the other readings of t's protocol point.
+  std::vector<double> others_at(const std::vector<double>& r, std::size_t t) const {
+    std::vector<double> others;
+    for (std::size_t s : points_.at(key_[t])) {
+      if (s != t) others.push_back(r[s]);
+    }
+    return others;
+  }
   std::vector<std::vector<long>> key_;
   std::map<std::vector<long>, std::vector<std::size_t>> points_;
 };
