@@ -260,6 +260,60 @@ TEST(ReturnPointSignature, FindsADriftOfAFewNoiseSigmas) {
 // way down from 1/4 rests on the pair (1/8, 1/4), which no other cycle traverses, so it alone
 // is not identified held out; the readings of the excursion's rise (pairs from 0, as every
 // rise) are.
+// The lonely stroke's second look (diagnose.cpp, lonely_within_segments): held out by cycles
+// inside the segments, every reading of a test at several loads is scored, every segment's
+// first rise lies in one fold, and no two consecutive segments' first rises share a fold (so
+// the term is always trained on the first rise after the load change before); held out by
+// load segment, the end loads always train. Over random protocols and load orders.
+TEST(FoldSchemes, CyclesWithinSegmentsScoreEveryFirstRise) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  for (int trial = 0; trial < 40; ++trial) {
+    const int loads = 3 + trial % 5, cycles = 3 + trial % 3;
+    std::vector<double> F;
+    for (int s = 0; s < loads; ++s) F.push_back(0.2 + 0.1 * s);
+    std::shuffle(F.begin(), F.end(), rng);
+    DiagnoseData data;
+    data.input_is_load = false;
+    std::vector<std::size_t> first_top;  // per segment: the row where the input first tops out
+    for (int s = 0; s < loads; ++s) {
+      const std::size_t start = data.input.size();
+      std::vector<double> u{0.0};
+      for (int c = 0; c < cycles; ++c) {
+        const double top = c == 0 ? 1.0 : 0.5 + 0.5 * U(rng);
+        for (int k = 1; k <= 6; ++k) u.push_back(top * k / 6.0);
+        for (int k = 5; k >= 0; --k) u.push_back(top * k / 6.0);
+      }
+      for (double v : u) {
+        data.input.push_back(v);
+        data.output.push_back(std::sqrt(v) * (1.0 + F[static_cast<std::size_t>(s)]));
+        data.load_N.push_back(F[static_cast<std::size_t>(s)]);
+      }
+      first_top.push_back(start + 6);
+    }
+    const Record within = make_record(data, DiagnoseOptions{}, FoldScheme::cycles_within_segments);
+    EXPECT_EQ(within.folds, 3) << trial;
+    EXPECT_EQ(within.fold_kind, "cycles within load segments");
+    for (std::size_t t = 0; t < within.size(); ++t)
+      ASSERT_GE(within.fold[t], 0) << trial << " " << t;
+    for (std::size_t s = 0; s < within.seg_first.size(); ++s) {
+      const std::size_t a = within.seg_first[s];
+      for (std::size_t t = a; t <= first_top[s]; ++t)
+        EXPECT_EQ(within.fold[t], within.fold[a]) << trial << " segment " << s;
+      if (s > 0) {
+        EXPECT_NE(within.fold[a], within.fold[within.seg_first[s - 1]]) << trial << " " << s;
+      }
+    }
+    const Record by_load = make_record(data, DiagnoseOptions{});
+    EXPECT_EQ(by_load.fold_kind, "load segments");
+    const auto [lo, hi] = std::minmax_element(F.begin(), F.end());
+    for (std::size_t t = 0; t < by_load.size(); ++t) {
+      const double f = by_load.seg_load[static_cast<std::size_t>(by_load.seg[t])];
+      EXPECT_EQ(by_load.fold[t] < 0, f == *lo || f == *hi) << trial << " " << t;
+    }
+  }
+}
+
 TEST(IdentifiedReadings, PairsTraversedByTheOtherFolds) {
   DiagnoseData data;
   const int cycles = 10, excursion_cycle = 6;

@@ -45,7 +45,7 @@ std::pair<double, double> line_fit(const std::vector<double>& x, const std::vect
 
 }  // namespace
 
-Record make_record(const DiagnoseData& data, const DiagnoseOptions& opt) {
+Record make_record(const DiagnoseData& data, const DiagnoseOptions& opt, FoldScheme scheme) {
   Record rec;
   const std::size_t n = data.input.size();
   if (data.output.size() != n || (!data.time_s.empty() && data.time_s.size() != n) ||
@@ -85,7 +85,8 @@ Record make_record(const DiagnoseData& data, const DiagnoseOptions& opt) {
   }
 
   rec.fold.assign(n, 0);
-  if (rec.several_loads && loads.size() >= 3) {
+  const bool by_load = scheme == FoldScheme::load_segments;
+  if (by_load && rec.several_loads && loads.size() >= 3) {
     // Leave one load out: every segment strictly inside the load range in turn; the segments
     // at the lowest and highest load stay in training (the maps interpolate, never extrapolate).
     const double lo = *loads.begin(), hi = *loads.rbegin();
@@ -94,7 +95,7 @@ Record make_record(const DiagnoseData& data, const DiagnoseOptions& opt) {
       rec.fold[t] = F > lo && F < hi ? rec.seg[t] : -1;
     }
     rec.fold_kind = "load segments";
-  } else if (rec.several_loads && rec.seg_first.size() >= 3) {
+  } else if (by_load && rec.several_loads && rec.seg_first.size() >= 3) {
     // Two loads in three or more segments (e.g. 400 -> 200 -> 400 g): every segment whose
     // load another segment shares is held out in turn.
     for (std::size_t t = 0; t < n; ++t) {
@@ -104,11 +105,12 @@ Record make_record(const DiagnoseData& data, const DiagnoseOptions& opt) {
     }
     rec.fold_kind = "load segments";
   } else if (rec.several_loads) {
-    // Two loads: blocks of whole cycles in each segment, the second segment's blocks rotated
-    // by one, so the two segments' first cycles never share a fold: whatever happens once per
-    // load change (the lonely stroke) is then in the training rows of every fold. Measured
-    // with the k-th blocks together (paper 001's 100 -> 50 g protocol, 0.08 lonely stroke):
-    // the running-maximum term could not be learned, gain 0, named `none`.
+    // Two loads (or FoldScheme::cycles_within_segments): blocks of whole cycles in each
+    // segment, each segment's blocks rotated by one against the one before, so consecutive
+    // segments' first cycles never share a fold: whatever happens once per load change (the
+    // lonely stroke) is then in the training rows of every fold. Measured with the k-th blocks
+    // together (paper 001's 100 -> 50 g protocol, 0.08 lonely stroke): the running-maximum term
+    // could not be learned, gain 0, named `none`.
     const int K = std::min(opt.folds, 3);
     for (std::size_t s = 0; s < rec.seg_first.size(); ++s) {
       const std::span<const double> us(rec.u.data() + rec.seg_first[s], rec.seg_count[s]);
@@ -116,7 +118,7 @@ Record make_record(const DiagnoseData& data, const DiagnoseOptions& opt) {
       for (std::size_t i = 0; i < b.size(); ++i)
         rec.fold[rec.seg_first[s] + i] = (b[i] + static_cast<int>(s)) % K;
     }
-    rec.fold_kind = "cycles";
+    rec.fold_kind = by_load ? "cycles" : "cycles within load segments";
   } else if (std::set<int>(data.segments.begin(), data.segments.end()).size() >= 2) {
     rec.fold = data.segments;
     rec.fold_kind = "segments";

@@ -38,8 +38,20 @@ struct Record {
   std::size_t size() const { return y.size(); }
 };
 
+/// How a test at several constant loads is held out.
+enum class FoldScheme {
+  /// By load segment (the maps are tested on loads they were not fitted at); records of one
+  /// load or of two loads in two segments are held out by cycles either way.
+  load_segments,
+  /// By blocks of whole cycles inside every segment, rotated from segment to segment, so that
+  /// every segment's first rise is scored and its offset and range are fitted on its later
+  /// cycles (the lonely stroke's second look, diagnose.cpp).
+  cycles_within_segments,
+};
+
 /// Builds the record and its folds. IdentificationError when it cannot be diagnosed.
-Record make_record(const DiagnoseData& data, const DiagnoseOptions& options);
+Record make_record(const DiagnoseData& data, const DiagnoseOptions& options,
+                   FoldScheme scheme = FoldScheme::load_segments);
 
 /// Map families through the per-segment offsets and ranges (several loads).
 struct MapFit {

@@ -17,11 +17,11 @@ namespace {
 constexpr double kKelvinHolds[] = {0.3, 1.0, 3.0};
 
 void kelvin_lag(const Record& rec, const std::vector<double>& p, const std::vector<double>& dt,
-                double tau, std::vector<double>& lag) {
+                double tau, std::vector<double>& lag, bool carried = false) {
   lag.resize(rec.size());
   double v = 0.0;
   for (std::size_t t = 0; t < rec.size(); ++t) {
-    const bool start = t == 0 || rec.seg[t] != rec.seg[t - 1];
+    const bool start = t == 0 || (!carried && rec.seg[t] != rec.seg[t - 1]);
     v = start ? p[t] : p[t] + (v - p[t]) * std::exp(-dt[t] / tau);
     lag[t] = p[t] - v;
   }
@@ -230,6 +230,35 @@ Finding kelvin_creep(Context& ctx) {
 }
 
 }  // namespace
+
+Finding detect_creep_across_loads(Context& ctx) {
+  const Record& rec = ctx.rec;
+  std::vector<double> steps;
+  for (std::size_t t = 1; t < rec.size(); ++t) {
+    if (rec.time[t] > rec.time[t - 1]) steps.push_back(rec.time[t] - rec.time[t - 1]);
+  }
+  if (!rec.several_loads || steps.empty())
+    return not_tested(ctx, "creep", "needs timed readings at several loads");
+  const double step = median(steps);
+  // The lag p - v of Kelvin elements v relaxing towards the fold's prediction p, carried
+  // through the load changes (at each one p jumps and v follows from where it was), with
+  // tau = 1, 3, 10 reading intervals; weights on each fold's training rows (two-stage).
+  constexpr double kTaus[] = {1.0, 3.0, 10.0};
+  return feature_finding(
+      ctx, "creep",
+      "baseline + Kelvin elements carried across load changes (tau = 1, 3, 10 readings)",
+      [&](const FoldFit& fit) {
+        const std::vector<double> dt = reading_intervals(rec);
+        Eigen::MatrixXd X(static_cast<Eigen::Index>(rec.size()), 3);
+        std::vector<double> lag;
+        for (Eigen::Index k = 0; k < 3; ++k) {
+          kelvin_lag(rec, fit.pred, dt, kTaus[k] * step, lag, true);
+          X.col(k) = Eigen::Map<const Eigen::VectorXd>(lag.data(), X.rows());
+        }
+        return X;
+      },
+      "the lag of the response behind its rate-independent value, carried across load changes");
+}
 
 Finding detect_creep(Context& ctx) {
   if (!ctx.holds.available) return kelvin_creep(ctx);

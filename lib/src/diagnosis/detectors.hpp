@@ -40,6 +40,8 @@ struct Context {
   Signature dwell;  ///< creep with one reading per hold: residuals against the hold times
   /// Held-out readings whose memory their fold's training identified (identified_readings).
   std::vector<char> identified;
+  /// Folds whose training rows chose a lonely-stroke term (detect_lonely_stroke).
+  int lonely_folds_with_term = 0;
   std::mt19937_64 rng;
 
   Context(const Record& r, const Baseline& b, const DiagnoseOptions& o);
@@ -83,6 +85,9 @@ std::string describe(const Signature& s);
 
 Finding detect_drift(Context& ctx);
 Finding detect_creep(Context& ctx);
+/// Creep on a test at several loads through one Kelvin element that is not restarted at load
+/// changes: after each change the response relaxes from where the last segment left it.
+Finding detect_creep_across_loads(Context& ctx);
 Finding detect_lonely_stroke(Context& ctx);
 Finding detect_noncongruence(Context& ctx);
 Finding detect_load_shape_coupling(Context& ctx);

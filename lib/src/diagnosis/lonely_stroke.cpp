@@ -187,6 +187,7 @@ Finding detect_lonely_stroke(Context& ctx) {
           chosen += fmt::format("{}0", chosen.empty() ? "" : ", ");
           return base.pred;
         }
+        ++ctx.lonely_folds_with_term;
         const std::vector<double> y = shifted(best_c);
         FoldFit fit = ctx.base.fit(train, {{}, &y, false});
         if (rec.several_loads) {
