@@ -574,6 +574,40 @@ TEST(Diagnose, ShortRecordsAreCutIntoMoreFolds) {
 // range off and the drift was named `outliers`; it is not scored.
 TEST(Diagnose, ExtrapolatedReadingsAreNotScored) { expect_named("load", "drift", {17}); }
 
+// Creep that runs on through the load changes: the rig's clean voltage tests (damped
+// cycles at several loads, one reading per hold) seen through one first-order lag of the whole
+// record, y = (1 - c) y0 + c v with v relaxing towards y0 (its state carried from one load's
+// segment into the next, as a specimen's is). A Kelvin element restarted at each load cannot
+// follow the offset this leaves on each segment's first readings, nor can the lonely stroke's
+// term take it (the third independent generator's creep: 0 of 14 found before the carried
+// element, two named `lonely_stroke`). Lag fractions 0.2-0.3, time constants of 2-3 readings
+// (with one reading, c = 0.2, the lag offsets each segment's first reading alone, and
+// those are named `outliers`: left open, docs/diagnose.md, session 27).
+TEST(Diagnose, CreepCarriedAcrossLoadChanges) {
+  for (const auto& [index, c, readings] :
+       {std::tuple{0, 0.3, 2.0}, std::tuple{1, 0.2, 2.0}, std::tuple{2, 0.3, 3.0}}) {
+    const testing::Scenario s = make_scenario("voltage", "none", index);
+    DiagnoseData data = testing::scenario_data(s);
+    ASSERT_EQ(data.time_s.size(), data.output.size());
+    std::vector<double> dt;
+    for (std::size_t t = 1; t < data.time_s.size(); ++t)
+      dt.push_back(data.time_s[t] - data.time_s[t - 1]);
+    std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2), dt.end());
+    const double tau = readings * dt[dt.size() / 2];
+    double v = data.output.front();
+    for (std::size_t t = 0; t < data.output.size(); ++t) {
+      const double d = t == 0 ? 0.0 : std::exp(-(data.time_s[t] - data.time_s[t - 1]) / tau);
+      v = data.output[t] + (v - data.output[t]) * d;
+      data.output[t] = (1.0 - c) * data.output[t] + c * v;
+    }
+    const Diagnosis d = diagnose(data);
+    EXPECT_EQ(d.cause, "creep") << s.describe() << " c " << c << " tau " << tau << " s\n"
+                                << finding(d, "creep").evidence << "\n"
+                                << finding(d, "lonely_stroke").evidence;
+    EXPECT_LT(finding(d, "creep").heldout_rms_after, finding(d, "creep").heldout_rms_before);
+  }
+}
+
 TEST(Diagnose, VoltageTestsCleanKneeLonelyStroke) {
   expect_named("voltage", "none", {0});
   expect_named("voltage", "offset_nonlinearity", {2});

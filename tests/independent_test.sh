@@ -76,7 +76,10 @@
 #   (the term gained 6-20 % at p = 0.018-0.25); now also held out by cycles inside every
 #   segment, every first rise scored (diagnose.cpp, lonely_within_segments). And the clean
 #   second-generator record of seed 1500 (eight loads, random turns), which that second look
-#   named `lonely_stroke` while one fold of three choosing the term sufficed (`none`).
+#   named `lonely_stroke` while one fold of three choosing the term sufficed (`none`); and two
+#   voltage creeps of the third generator (seeds 703 and 704, a first-order lag carried across
+#   the load changes), `none` before and named `lonely_stroke` by the second look until one
+#   Kelvin element carried across load changes was fitted (`creep`).
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -118,6 +121,7 @@ python3 "$src/scripts/independent_cases_c.py" "$work/c" 1 605 voltage-lonely_str
 python3 "$src/scripts/independent_cases_c.py" "$work/c" 1 607 voltage-lonely_stroke || exit 1
 python3 "$src/scripts/independent_cases_c.py" "$work/c" 1 609 voltage-lonely_stroke || exit 1
 python3 "$src/scripts/independent_cases_b.py" "$work/b" 1 1500 voltage-none || exit 1
+python3 "$src/scripts/independent_cases_c.py" "$work/c" 2 703 voltage-creep || exit 1
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -171,5 +175,7 @@ expect "$work/c/voltage-lonely_stroke-605.csv" lonely_stroke
 expect "$work/c/voltage-lonely_stroke-607.csv" lonely_stroke
 expect "$work/c/voltage-lonely_stroke-609.csv" lonely_stroke
 expect "$work/b/voltage-none-1500.csv" none
+expect "$work/c/voltage-creep-703.csv" creep
+expect "$work/c/voltage-creep-704.csv" creep
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "detectors.hpp"
 #include "stats.hpp"
@@ -17,11 +18,11 @@ namespace {
 constexpr double kKelvinHolds[] = {0.3, 1.0, 3.0};
 
 void kelvin_lag(const Record& rec, const std::vector<double>& p, const std::vector<double>& dt,
-                double tau, std::vector<double>& lag, bool carried = false) {
+                double tau, std::vector<double>& lag) {
   lag.resize(rec.size());
   double v = 0.0;
   for (std::size_t t = 0; t < rec.size(); ++t) {
-    const bool start = t == 0 || (!carried && rec.seg[t] != rec.seg[t - 1]);
+    const bool start = t == 0 || rec.seg[t] != rec.seg[t - 1];
     v = start ? p[t] : p[t] + (v - p[t]) * std::exp(-dt[t] / tau);
     lag[t] = p[t] - v;
   }
@@ -32,6 +33,29 @@ std::vector<double> reading_intervals(const Record& rec) {
   std::vector<double> dt(rec.size(), 0.0);
   for (std::size_t t = 1; t < rec.size(); ++t) dt[t] = std::max(rec.time[t] - rec.time[t - 1], 0.0);
   return dt;
+}
+
+// Known by its gain, creep must also be what most folds' training rows chose: a gain carried
+// by a minority of folds is a misfit some folds happen to absorb with a lag (measured: a clean
+// damped record of an independent generator, 59 readings scored, c > 0 in 2 of 6 folds, gain
+// 8.6 % at p = 0.006, named `creep`). On the rig's 48 creep records (24 per side) every fold
+// chose c > 0 wherever the Kelvin element was detected; on its clean records folds choose
+// c > 0 now and then (up to 6 of 7), so this is a guard, not evidence.
+void require_most_folds(Finding& f, int creeping_folds, int folds) {
+  if (f.detected && 2 * creeping_folds <= folds) {
+    f.detected = false;
+    f.evidence +=
+        fmt::format("; only {} of {} folds chose a creep fraction above 0", creeping_folds, folds);
+  }
+}
+
+// The median time between consecutive readings that the clock separates; 0 when none are.
+double reading_step(const Record& rec) {
+  std::vector<double> dt;
+  for (std::size_t t = 1; t < rec.size(); ++t) {
+    if (rec.time[t] > rec.time[t - 1]) dt.push_back(rec.time[t] - rec.time[t - 1]);
+  }
+  return dt.empty() ? 0.0 : median(dt);
 }
 
 // Permutations of the hold-time test: ten times the other tests', since where it names creep
@@ -135,12 +159,8 @@ Finding prony_creep(Context& ctx, double hold) {
 // readings' own time (the lag behind each step, and how it changes with the hold times).
 Finding kelvin_creep(Context& ctx) {
   const Record& rec = ctx.rec;
-  std::vector<double> dt;
-  for (std::size_t t = 1; t < rec.size(); ++t) {
-    if (rec.time[t] > rec.time[t - 1]) dt.push_back(rec.time[t] - rec.time[t - 1]);
-  }
-  if (dt.empty()) return not_tested(ctx, "creep", "the readings carry no time");
-  const double step = median(dt);
+  const double step = reading_step(rec);
+  if (!(step > 0.0)) return not_tested(ctx, "creep", "the readings carry no time");
   // Kelvin element in the readings' own time: y = (1 - c) Gamma + c v, v relaxing towards
   // Gamma with time constant tau (restarted at each segment). The model is fitted through the
   // filter (weights stay linear); c and tau chosen on each fold's training rows.
@@ -195,17 +215,7 @@ Finding kelvin_creep(Context& ctx) {
       },
       "the response lags its rate-independent value with the readings' own timing");
   f.extended_model += " (per fold: " + chosen + ")";
-  // Known by its gain, creep must also be what most folds' training rows chose: a gain carried
-  // by a minority of folds is a misfit some folds happen to absorb with a lag (measured: a
-  // clean damped record of an independent generator, 59 readings scored, c > 0 in 2 of 6
-  // folds, gain 8.6 % at p = 0.006, named `creep`). On the rig's 48 creep records (24 per
-  // side) every fold chose c > 0 wherever the Kelvin element was detected; on its clean
-  // records folds choose c > 0 now and then (up to 6 of 7), so this is a guard, not evidence.
-  if (f.detected && 2 * creeping_folds <= rec.folds) {
-    f.detected = false;
-    f.evidence += fmt::format("; only {} of {} folds chose a creep fraction above 0",
-                              creeping_folds, rec.folds);
-  }
+  require_most_folds(f, creeping_folds, rec.folds);
   ctx.dwell = dwell_signature(ctx, step);
   // Where the residuals follow the hold times, the lag itself as a feature too (the Prony
   // series on the baseline's prediction, as with readings during holds): the Kelvin grid's
@@ -214,6 +224,16 @@ Finding kelvin_creep(Context& ctx) {
   if (ctx.dwell.available && ctx.dwell.p_value < ctx.opt.alpha) {
     Finding g = prony_creep(ctx, step);
     if (g.gain_pct > f.gain_pct) f = g;
+  }
+  // At several loads also one element carried across the load changes (session 27): a lag
+  // that runs on through a load change offsets each segment's first readings, which the
+  // element restarted at each load cannot follow (measured: 14 voltage creeps of the third
+  // independent generator, a first-order lag of the whole record, 0 found before, 11 by the
+  // carried element; on its 60 records of every other voltage kind it was detected on none).
+  // The detected one is kept, or the one gaining more.
+  if (rec.several_loads) {
+    Finding g = detect_creep_across_loads(ctx);
+    if (g.detected != f.detected ? g.detected : g.gain_pct > f.gain_pct) f = std::move(g);
   }
   if (ctx.dwell.available) {
     f.evidence += fmt::format(
@@ -233,31 +253,82 @@ Finding kelvin_creep(Context& ctx) {
 
 Finding detect_creep_across_loads(Context& ctx) {
   const Record& rec = ctx.rec;
-  std::vector<double> steps;
-  for (std::size_t t = 1; t < rec.size(); ++t) {
-    if (rec.time[t] > rec.time[t - 1]) steps.push_back(rec.time[t] - rec.time[t - 1]);
-  }
-  if (!rec.several_loads || steps.empty())
+  const std::size_t n = rec.size();
+  const double step = reading_step(rec);
+  if (!rec.several_loads || !(step > 0.0))
     return not_tested(ctx, "creep", "needs timed readings at several loads");
-  const double step = median(steps);
-  // The lag p - v of Kelvin elements v relaxing towards the fold's prediction p, carried
-  // through the load changes (at each one p jumps and v follows from where it was), with
-  // tau = 1, 3, 10 reading intervals; weights on each fold's training rows (two-stage).
-  constexpr double kTaus[] = {1.0, 3.0, 10.0};
-  return feature_finding(
+  // One Kelvin element through the whole test, y = (1 - c) P + c v with v relaxing towards the
+  // augmented model's output P (offsets and ranges included, so at each load change P jumps and
+  // v follows from where it was). The filter acts on P after the per-segment maps, which the
+  // baseline's output filter (on H) cannot carry, so the model is fitted on the response
+  // un-lagged, P = (y - c d v_prev) / (1 - c d) with d = exp(-dt / tau), and its prediction
+  // lagged again. On rows a fold does not train, v runs on the fold's baseline prediction, so no
+  // held-out reading enters a training target. c in {0.1, 0.2, 0.4}, tau in {1, 2, 5, 10}
+  // reading intervals, or c = 0 (the baseline), chosen on each fold's training rows (a grid of
+  // 6, c in {0.15, 0.3} and tau in {1, 3, 10}, found 9 of the 14 creeps below instead of 10 and
+  // saved a tenth of diagnose's time on a voltage record).
+  struct Kelvin {
+    double c, tau;
+  };
+  std::vector<Kelvin> candidates{{0.0, step}};
+  for (double c : {0.1, 0.2, 0.4}) {
+    for (double tau : {1.0, 2.0, 5.0, 10.0}) candidates.push_back({c, tau * step});
+  }
+  auto decay = [&](std::size_t t, double tau) {
+    return t == 0 ? 0.0 : std::exp(-std::max(rec.time[t] - rec.time[t - 1], 0.0) / tau);
+  };
+  auto lagged = [&](const std::vector<double>& P, Kelvin k) {
+    std::vector<double> out(n);
+    double v = 0.0;
+    for (std::size_t t = 0; t < n; ++t) {
+      const double d = decay(t, k.tau);
+      v = (1.0 - d) * P[t] + d * v;
+      out[t] = (1.0 - k.c) * P[t] + k.c * v;
+    }
+    return out;
+  };
+  auto predict = [&](const std::vector<char>& train, const std::vector<double>& base, Kelvin k,
+                     bool quick) {
+    std::vector<double> z(rec.y);
+    double v = 0.0;
+    for (std::size_t t = 0; t < n; ++t) {
+      const double d = decay(t, k.tau);
+      const double P = train[t] ? (rec.y[t] - k.c * d * v) / (1.0 - k.c * d) : base[t];
+      z[t] = P;
+      v = (1.0 - d) * P + d * v;
+    }
+    return lagged(ctx.base.fit(train, {nullptr, &z, quick}).pred, k);
+  };
+  std::string chosen;
+  int creeping_folds = 0;
+  Finding f = model_finding(
       ctx, "creep",
-      "baseline + Kelvin elements carried across load changes (tau = 1, 3, 10 readings)",
-      [&](const FoldFit& fit) {
-        const std::vector<double> dt = reading_intervals(rec);
-        Eigen::MatrixXd X(static_cast<Eigen::Index>(rec.size()), 3);
-        std::vector<double> lag;
-        for (Eigen::Index k = 0; k < 3; ++k) {
-          kelvin_lag(rec, fit.pred, dt, kTaus[k] * step, lag, true);
-          X.col(k) = Eigen::Map<const Eigen::VectorXd>(lag.data(), X.rows());
+      "augmented baseline through one Kelvin element carried across load changes (creep "
+      "fraction c, time constant tau)",
+      [&](int k) {
+        const std::vector<char> train = ctx.train_mask(k);
+        const std::vector<double>& base = ctx.by_fold[static_cast<std::size_t>(k)].pred;
+        double best = std::numeric_limits<double>::infinity();
+        Kelvin best_k{0.0, step};
+        for (const Kelvin& kv : candidates) {  // chosen on one grid, then refitted
+          const std::vector<double> p = kv.c == 0.0
+                                            ? ctx.base.fit(train, {nullptr, nullptr, true}).pred
+                                            : predict(train, base, kv, true);
+          const double ss = training_sse(rec.y, p, train);
+          if (ss < best) {
+            best = ss;
+            best_k = kv;
+          }
         }
-        return X;
+        if (best_k.c > 0.0) ++creeping_folds;
+        chosen +=
+            fmt::format("{}c {:g}, tau {:.3g} s", chosen.empty() ? "" : "; ", best_k.c, best_k.tau);
+        return best_k.c > 0.0 ? predict(train, base, best_k, false) : base;
       },
-      "the lag of the response behind its rate-independent value, carried across load changes");
+      "the response lags its rate-independent value, the lag carried across load changes");
+  f.extended_model += " (per fold: " + chosen + ")";
+  require_most_folds(f, creeping_folds, rec.folds);
+  return f;
 }
 
 Finding detect_creep(Context& ctx) {

@@ -135,10 +135,15 @@ HeldOut hold_out(const DiagnoseData& data, const DiagnoseOptions& options,
 /// load (creep) gain on the same folds: both also change the first rise against later cycles.
 /// Returns the finding to report, or nothing.
 std::optional<Finding> lonely_within_segments(const DiagnoseData& data, const DiagnoseOptions& opt,
+                                              const diagnosis::Baseline& base,
                                               const Finding& by_load) {
+  // L and the smoothness were chosen on the whole record, which the folds do not enter: the
+  // same choice, without choosing again.
+  DiagnoseOptions within = opt;
+  within.baseline = base.options();
   HeldOut h;
   try {
-    h = hold_out(data, opt, diagnosis::FoldScheme::cycles_within_segments);
+    h = hold_out(data, within, diagnosis::FoldScheme::cycles_within_segments);
   } catch (const IdentificationError&) {
     return std::nullopt;  // too few cycles inside the segments to hold any out
   }
@@ -395,7 +400,7 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   if ((d.cause == "none" || d.cause == "unexplained") && rec.fold_kind == "load segments") {
     for (Finding& f : d.findings) {
       if (f.effect != "lonely_stroke") continue;
-      if (std::optional<Finding> second = lonely_within_segments(data, opt, f)) {
+      if (std::optional<Finding> second = lonely_within_segments(data, opt, base, f)) {
         f = std::move(*second);
         d.cause = f.effect;
         d.cause_note.clear();
