@@ -203,6 +203,9 @@ TEST(Diagnose, LonelyStrokeAfterOneLoadChange) {
 // resets every hysteron of a plane on the tested voltages) differ by the lonely stroke, and
 // the running-maximum term gains on held-out cycles, or, where the first rise's fold cannot
 // train it, the offset alone names it in place of `unexplained`. Clean records: `none`.
+// (Index 0 at 70 g, a 3 % stroke, is left out since session 28: its offset's p went from
+// 8e-5 to 0.0045 once the test credits the readings its pairs share and the noise's lag-one
+// correlation, 0.37 on its plain pairs; short of alpha / 10, it is `none`.)
 TEST(Diagnose, LonelyStrokeOnOneLoadIsNamedByItsReturnPointOffset) {
   for (const double load : {40.0, 70.0, 100.0}) {
     const auto one_load = [&](RigSpec& r) {
@@ -210,7 +213,8 @@ TEST(Diagnose, LonelyStrokeOnOneLoadIsNamedByItsReturnPointOffset) {
       r.voltage.shape = "repeated";
       r.voltage.cycles = 4;
     };
-    expect_named("voltage", "lonely_stroke", {0, 1, 2}, one_load);
+    expect_named("voltage", "lonely_stroke",
+                 load == 70.0 ? std::vector<int>{1, 2} : std::vector<int>{0, 1, 2}, one_load);
     expect_named("voltage", "none", {0, 1, 2, 3, 4, 5, 6, 7}, one_load);
   }
 }
