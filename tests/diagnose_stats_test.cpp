@@ -217,8 +217,8 @@ Record cycles_with_noise(std::mt19937& rng, double noise, double rho, double dri
 // How often the return-point time signature (readings in the same memory state, apart in time:
 // the drift's model-free evidence), or with `running_max` the running-maximum signature (the
 // lonely stroke's), falls below `level` on 300 records.
-double time_signature_rate(double rho, double drift, double level, unsigned seed,
-                           bool running_max = false) {
+double return_point_rate(double rho, double drift, double level, unsigned seed,
+                         bool running_max = false) {
   std::mt19937 rng(seed);
   int below = 0, trials = 0;
   for (int i = 0; i < 300; ++i) {
@@ -237,8 +237,8 @@ double time_signature_rate(double rho, double drift, double level, unsigned seed
 TEST(ReturnPointSignature, CalibratedOnWhiteNoise) {
   // Conservative (measured: 3 of 300 below 0.05, none below 0.01): consecutive pairs of one
   // memory state share readings, which the regression does not credit.
-  EXPECT_LT(time_signature_rate(0.0, 0.0, 0.01, 22), 0.025);
-  EXPECT_LT(time_signature_rate(0.0, 0.0, 0.05, 21), 0.08);
+  EXPECT_LT(return_point_rate(0.0, 0.0, 0.01, 22), 0.025);
+  EXPECT_LT(return_point_rate(0.0, 0.0, 0.05, 21), 0.08);
 }
 
 TEST(ReturnPointSignature, SensorNoiseThatIsNotWhiteIsNotADrift) {
@@ -247,7 +247,7 @@ TEST(ReturnPointSignature, SensorNoiseThatIsNotWhiteIsNotADrift) {
   // fell below 0.01 in 9 of 300 records at rho 0.5 and 52 of 300 at rho 0.8 (and named a drift
   // in 4 of 30 clean voltage records of the independent generator); with it, in none.
   for (double rho : {0.5, 0.8}) {
-    EXPECT_LT(time_signature_rate(rho, 0.0, 0.01, 23), 0.02) << "rho " << rho;
+    EXPECT_LT(return_point_rate(rho, 0.0, 0.01, 23), 0.02) << "rho " << rho;
   }
 }
 
@@ -259,15 +259,15 @@ TEST(ReturnPointSignature, SensorNoiseThatIsNotWhiteIsNotADrift) {
 // AR(1) readings (signatures.cpp, least_squares) in 5 and 5 (17 and 11). White: 1 either way.
 TEST(ReturnPointSignature, RunningMaximumCalibratedUnderNoiseThatIsNotWhite) {
   for (double rho : {0.0, 0.5, 0.8}) {
-    EXPECT_LT(time_signature_rate(rho, 0.0, 0.01, 25, true), 0.03) << "rho " << rho;
-    EXPECT_LT(time_signature_rate(rho, 0.0, 0.05, 26, true), 0.09) << "rho " << rho;
+    EXPECT_LT(return_point_rate(rho, 0.0, 0.01, 25, true), 0.03) << "rho " << rho;
+    EXPECT_LT(return_point_rate(rho, 0.0, 0.05, 26, true), 0.09) << "rho " << rho;
   }
 }
 
 TEST(ReturnPointSignature, FindsADriftOfAFewNoiseSigmas) {
   // A drift of 8 noise sigmas over the record, one of them within each load segment, white
   // noise: found below 0.01 in 223 of 300 records (232 without the inflation).
-  EXPECT_GT(time_signature_rate(0.0, 8.0, 0.01, 24), 0.6);
+  EXPECT_GT(return_point_rate(0.0, 8.0, 0.01, 24), 0.6);
 }
 
 // identified_readings: on full cycles 0 -> 1 -> 0, read every 1/8, every Everett pair of a

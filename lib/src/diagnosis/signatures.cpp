@@ -193,6 +193,57 @@ struct ReadingPairs {
   std::vector<char> plain;
 };
 
+/// Rows that are differences of readings share readings (a -> b, b -> c: the state met
+/// three times), and with AR(1) noise readings close in the record move together though
+/// their rows are far apart in the regression. The coefficients' covariance under that
+/// noise model is bread X' S X bread, S_ij = s2 (R(b_i, b_j) - R(b_i, a_j) - R(a_i, b_j) +
+/// R(a_i, a_j)), R(s, t) = rho^|s - t| in readings; rho the rows' lag-one autocorrelation
+/// where both readings moved on by one (among plain rows: the residuals of rows an effect
+/// moves carry its misfit, which read as correlated noise on a rig record of a 3 % lonely
+/// stroke, white noise, rho 0.31, and lost it), s2 from the residuals (E e_i^2 = 2 s2 (1 -
+/// R(a_i, b_i))). X' S X = s2 sum_st v_s v_t' R(s, t), v_s the sum of the rows that read s
+/// (later reading +, earlier -), in one pass with g_s = sum_{t < s} R(s, t) v_t. Measured (session
+/// 28): on 60 AR(1) noise draws, rho 0.6, over one clean load record's protocol of the third
+/// independent generator, the running-maximum z had a standard deviation of 1.32 before and 1.05
+/// after (the time z 0.96 either way); on clean voltage tests with AR(1) noise, rho 0.5 and 0.8, it
+/// fell below 0.01 in 6-9 % of records before and 1.7 % after (test
+/// RunningMaximumCalibratedUnderNoiseThatIsNotWhite).
+Eigen::MatrixXd ar1_difference_cov(const Eigen::MatrixXd& X, const Eigen::VectorXd& e,
+                                   const ReadingPairs& pairs, double var, double var_floor,
+                                   const Eigen::MatrixXd& bread) {
+  const Eigen::Index n = X.rows(), m = X.cols();
+  double num = 0.0, den = 0.0;
+  std::size_t last = 0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto ii = static_cast<std::size_t>(i);
+    const auto& [a0, b0] = pairs.rows[ii];
+    last = std::max({last, a0, b0});
+    if (i + 1 == n) break;
+    const auto& [a1, b1] = pairs.rows[ii + 1];
+    if (a1 != a0 + 1 || b1 != b0 + 1 || !pairs.plain[ii] || !pairs.plain[ii + 1]) continue;
+    num += e[i] * e[i + 1];
+    den += 0.5 * (e[i] * e[i] + e[i + 1] * e[i + 1]);
+  }
+  const double rho = den > 0.0 ? std::clamp(num / den, 0.0, 0.9) : 0.0;
+  Eigen::MatrixXd v = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(last + 1), m);
+  double expect = 0.0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto& [a, b] = pairs.rows[static_cast<std::size_t>(i)];
+    v.row(static_cast<Eigen::Index>(b)) += X.row(i);
+    v.row(static_cast<Eigen::Index>(a)) -= X.row(i);
+    expect += 2.0 * (1.0 - std::pow(rho, static_cast<double>(b - a)));
+  }
+  const double s2 =
+      std::max(var * static_cast<double>(n) / std::max(expect, 1e-300), 0.5 * var_floor);
+  Eigen::MatrixXd meat = Eigen::MatrixXd::Zero(m, m);
+  Eigen::RowVectorXd g = Eigen::RowVectorXd::Zero(m);
+  for (Eigen::Index t = 0; t < v.rows(); ++t) {
+    if (t > 0) g = rho * (g + v.row(t - 1));
+    meat += v.row(t).transpose() * v.row(t) + v.row(t).transpose() * g + g.transpose() * v.row(t);
+  }
+  return s2 * bread * meat * bread;
+}
+
 Regression least_squares(const Eigen::MatrixXd& X, const Eigen::VectorXd& d, double var_floor,
                          const ReadingPairs* pairs = nullptr) {
   Regression r;
@@ -217,53 +268,8 @@ Regression least_squares(const Eigen::MatrixXd& X, const Eigen::VectorXd& d, dou
     const double rho = std::clamp(lag1, 0.0, 0.9);
     r.inflation[j] = (1.0 + rho) / (1.0 - rho);
   }
-  if (pairs) {
-    // Rows that are differences of readings share readings (a -> b, b -> c: the state met
-    // three times), and with AR(1) noise readings close in the record move together though
-    // their rows are far apart in the regression. The coefficients' covariance under that
-    // noise model is bread X' S X bread, S_ij = s2 (R(b_i, b_j) - R(b_i, a_j) - R(a_i, b_j) +
-    // R(a_i, a_j)), R(s, t) = rho^|s - t| in readings; rho the rows' lag-one autocorrelation
-    // where both readings moved on by one (among plain rows: the residuals of rows an effect
-    // moves carry its misfit, which read as correlated noise on a rig record of a 3 % lonely
-    // stroke, white noise, rho 0.31, and lost it), s2 from the residuals (E e_i^2 = 2 s2 (1 -
-    // R(a_i, b_i))). X' S X = s2 sum_st v_s v_t' R(s, t), v_s the sum of the rows that read s
-    // (later reading +, earlier -), in one pass with g_s = sum_{t < s} R(s, t) v_t. A coefficient's
-    // variance is raised to it where that is larger. Measured (session 28): on 60 AR(1) noise
-    // draws, rho 0.6, over one clean load record's protocol of the third independent
-    // generator, the running-maximum z had a standard deviation of 1.32 before and 1.05 after
-    // (the time z 0.96 either way); on clean voltage tests with AR(1) noise, rho 0.5 and 0.8,
-    // it fell below 0.01 in 6-9 % of records before and 1.7 % after (test
-    // RunningMaximumCalibratedUnderNoiseThatIsNotWhite).
-    double num = 0.0, den = 0.0;
-    std::size_t last = 0;
-    for (Eigen::Index i = 0; i < r.n; ++i) {
-      const auto ii = static_cast<std::size_t>(i);
-      const auto& [a0, b0] = pairs->rows[ii];
-      last = std::max({last, a0, b0});
-      if (i + 1 == r.n) break;
-      const auto& [a1, b1] = pairs->rows[ii + 1];
-      if (a1 != a0 + 1 || b1 != b0 + 1 || !pairs->plain[ii] || !pairs->plain[ii + 1]) continue;
-      num += e[i] * e[i + 1];
-      den += 0.5 * (e[i] * e[i] + e[i + 1] * e[i + 1]);
-    }
-    const double rho = den > 0.0 ? std::clamp(num / den, 0.0, 0.9) : 0.0;
-    Eigen::MatrixXd v = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(last + 1), m);
-    double expect = 0.0;
-    for (Eigen::Index i = 0; i < r.n; ++i) {
-      const auto& [a, b] = pairs->rows[static_cast<std::size_t>(i)];
-      v.row(static_cast<Eigen::Index>(b)) += X.row(i);
-      v.row(static_cast<Eigen::Index>(a)) -= X.row(i);
-      expect += 2.0 * (1.0 - std::pow(rho, static_cast<double>(b - a)));
-    }
-    const double s2 =
-        std::max(r.var * static_cast<double>(r.n) / std::max(expect, 1e-300), 0.5 * var_floor);
-    Eigen::MatrixXd meat = Eigen::MatrixXd::Zero(m, m);
-    Eigen::RowVectorXd g = Eigen::RowVectorXd::Zero(m);
-    for (Eigen::Index t = 0; t < v.rows(); ++t) {
-      if (t > 0) g = rho * (g + v.row(t - 1));
-      meat += v.row(t).transpose() * v.row(t) + v.row(t).transpose() * g + g.transpose() * v.row(t);
-    }
-    const Eigen::MatrixXd model = s2 * bread * meat * bread;
+  if (pairs) {  // each coefficient's variance raised to that model's where it is larger
+    const Eigen::MatrixXd model = ar1_difference_cov(X, e, *pairs, r.var, var_floor, bread);
     for (Eigen::Index j = 0; j < m; ++j) {
       const double homo = r.var * bread(j, j);
       if (homo > 0.0) r.inflation[j] = std::max(r.inflation[j], model(j, j) / homo);
