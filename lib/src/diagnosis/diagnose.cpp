@@ -379,6 +379,17 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   for (const Finding& f : d.findings) {
     if (f.effect == "offset_nonlinearity") maps_miss = maps_miss_by_signature(ctx, f);
   }
+  // What the maps miss below five loads may be a drift: the segments' offsets then follow the
+  // order the loads were tested in, and with three training offsets neither a map beyond
+  // quadratic nor the offset map's trend (drift_in_offset_map) can be held out. A static map
+  // of the load cannot make readings in one memory state within a segment differ with the time
+  // between them; a drift does (the return-point time signature, as for drift_seen above).
+  // Measured on the 537 voltage records of the kept fresh sets of the three generators: of the
+  // 15 named offset_nonlinearity by what the maps miss, the 11 offset knees had time signatures
+  // of p >= 0.34 (or none available); of the 4 drifts one had p = 7e-6 (second generator, 10 %,
+  // four loads tested in increasing order) and is now `drift`, the others p >= 0.26 or none.
+  const bool drift_in_time =
+      ctx.return_point.time.available && ctx.return_point.time.p_value < opt.alpha;
   const bool holds_move = ctx.holds.available && ctx.holds.p_value < opt.alpha;
   const bool noncongruent = ctx.congruency.available && ctx.congruency.p_value < opt.alpha / 10.0 &&
                             ctx.congruency_robust.p_value < opt.alpha / 5.0 && !holds_move;
@@ -392,6 +403,12 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
     name_by_signature("minor_loop_noncongruence",
                       "no extension of the vocabulary models these loops well enough to gain on "
                       "held-out cycles");
+  } else if (material && maps_miss && drift_in_time) {
+    name_by_signature("drift",
+                      "the held-out error is material and mostly offsets at the held-out loads, "
+                      "where no map beyond quadratic (nor a trend beside it) can be held out, "
+                      "and readings in one memory state within a load segment differ with the "
+                      "time between them, which no static map of the load makes them do");
   } else if (material && maps_miss) {
     name_by_signature("offset_nonlinearity",
                       "the held-out error is material and mostly what the maps miss at the "

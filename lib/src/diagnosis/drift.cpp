@@ -75,7 +75,9 @@ Finding drift_in_offset_map(Context& ctx) {
         return p;
       },
       "offsets that follow the time of each load segment as well as its load");
-  f.extended_model += " (beta per fold: " + betas + ")";
+  f.extended_model += betas.empty()
+                          ? " (not fitted: every fold trains fewer than four segments' offsets)"
+                          : " (beta per fold: " + betas + ")";
   return f;
 }
 
