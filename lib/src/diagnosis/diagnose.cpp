@@ -252,8 +252,10 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   // in the same memory state differed with the time between them at p = 4e-59 and not with the
   // running maximum, p = 0.95).
   const Finding* drift = detected("drift");
-  const bool drift_seen =
-      drift && ctx.return_point.time.available && ctx.return_point.time.p_value < opt.alpha;
+  // Readings in one memory state within a segment that differ with the time between them.
+  const bool drift_in_time =
+      ctx.return_point.time.available && ctx.return_point.time.p_value < opt.alpha;
+  const bool drift_seen = drift && drift_in_time;
   // And ahead of an offset nonlinearity, a static map that cannot make readings in one memory
   // state differ with time within a segment, while a drift makes the segments' offsets follow
   // the order the loads were tested in, which a map through the training loads partly fits
@@ -383,13 +385,11 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   // order the loads were tested in, and with three training offsets neither a map beyond
   // quadratic nor the offset map's trend (drift_in_offset_map) can be held out. A static map
   // of the load cannot make readings in one memory state within a segment differ with the time
-  // between them; a drift does (the return-point time signature, as for drift_seen above).
+  // between them; a drift does (drift_in_time, above).
   // Measured on the 537 voltage records of the kept fresh sets of the three generators: of the
   // 15 named offset_nonlinearity by what the maps miss, the 11 offset knees had time signatures
   // of p >= 0.34 (or none available); of the 4 drifts one had p = 7e-6 (second generator, 10 %,
   // four loads tested in increasing order) and is now `drift`, the others p >= 0.26 or none.
-  const bool drift_in_time =
-      ctx.return_point.time.available && ctx.return_point.time.p_value < opt.alpha;
   const bool holds_move = ctx.holds.available && ctx.holds.p_value < opt.alpha;
   const bool noncongruent = ctx.congruency.available && ctx.congruency.p_value < opt.alpha / 10.0 &&
                             ctx.congruency_robust.p_value < opt.alpha / 5.0 && !holds_move;
