@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <random>
 #include <vector>
 
@@ -327,6 +328,76 @@ TEST(FoldSchemes, CyclesWithinSegmentsScoreEveryFirstRise) {
       const double f = by_load.seg_load[static_cast<std::size_t>(by_load.seg[t])];
       EXPECT_EQ(by_load.fold[t] < 0, f == *lo || f == *hi) << trial << " " << t;
     }
+  }
+}
+
+// Baseline::fit alternates between the shared loop H and each segment's offset and range until
+// the training rows' prediction settles. Held out by cycles inside the segments, a segment's
+// training rows can be part of its one cycle (its rise without the descent), where the start
+// of the alternation (a line in the input) is biased; two alternations left that bias in the
+// held-out prediction (2.5 % of range on a clean noise-free record of this kind). Over random
+// protocols of this kind (the input rising through random turns to its top, then straight
+// down, the same in every segment; the truth a Prandtl-Ishlinskii operator of play operators,
+// computed here, under an affine map of the load), noise-free, the held-out error stays small:
+// measured 0.008-0.062 % of range settled, 0.39-1.17 % after two alternations (five of the six
+// protocols above 0.3 %).
+TEST(BaselineFit, SettlesWhereTheTrainingRowsArePartOfACycle) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  for (int trial = 0; trial < 6; ++trial) {
+    std::vector<double> points{0.0};
+    const int turns = 6 + trial % 4;
+    for (int i = 0; i < turns; ++i) points.push_back(U(rng));
+    points.push_back(1.0);
+    points.push_back(0.0);
+    const double per_unit = trial % 2 ? 12.0 : 20.0;
+    std::vector<double> u{points[0]};
+    for (std::size_t i = 1; i < points.size(); ++i) {
+      const double a = points[i - 1], b = points[i];
+      const int k = std::max(2, static_cast<int>(std::lround(std::abs(b - a) * per_unit)));
+      for (int j = 1; j <= k; ++j) u.push_back(a + (b - a) * j / k);
+    }
+    std::vector<double> r, w;
+    for (int i = 0; i < 10; ++i) {
+      r.push_back(0.45 * U(rng));
+      w.push_back(0.2 + 0.8 * U(rng));
+    }
+    const double wsum = std::accumulate(w.begin(), w.end(), 0.0);
+    DiagnoseData data;
+    data.input_is_load = false;
+    const int loads = 4 + trial % 2;
+    for (int s = 0; s < loads; ++s) {
+      const double x = static_cast<double>(s) / (loads - 1);
+      std::vector<double> p = r;  // descended to 0 from above
+      for (double v : u) {
+        double h = 0.0;
+        for (std::size_t i = 0; i < r.size(); ++i) {
+          p[i] = std::min(std::max(p[i], v - r[i]), v + r[i]);
+          h += w[i] * p[i] / wsum;
+        }
+        data.input.push_back(v);
+        data.output.push_back(4.0 * (0.5 * x + 0.2 * x * x) -
+                              4.0 * (0.6 + 0.4 * x) * (0.3 * v + 0.7 * h));
+        data.load_N.push_back(0.3 + 0.2 * x);
+      }
+    }
+    const DiagnoseOptions opt;
+    const Record rec = make_record(data, opt, FoldScheme::cycles_within_segments);
+    const Baseline base(rec, opt.baseline);
+    double ss = 0.0;
+    std::size_t scored = 0;
+    for (int k = 0; k < rec.folds; ++k) {
+      std::vector<char> train(rec.size());
+      for (std::size_t t = 0; t < rec.size(); ++t) train[t] = rec.trains(t, k) ? 1 : 0;
+      const FoldFit fit = base.fit(train);
+      for (std::size_t t = 0; t < rec.size(); ++t) {
+        if (rec.fold[t] != k) continue;
+        ss += (rec.y[t] - fit.pred[t]) * (rec.y[t] - fit.pred[t]);
+        ++scored;
+      }
+    }
+    ASSERT_GT(scored, rec.size() / 2) << trial;
+    EXPECT_LT(100.0 * std::sqrt(ss / static_cast<double>(scored)) / rec.range, 0.3) << trial;
   }
 }
 

@@ -14,6 +14,12 @@
 namespace scpkit::diagnosis {
 namespace {
 
+// Baseline::fit alternates between the shared loop and the segments' offsets and ranges twice,
+// or (Record::settle) until no training row's prediction moves by more than this fraction of
+// the output range, or this many alternations have run.
+constexpr double kAlternationTolerance = 1e-4;
+constexpr int kMaxAlternations = 16;
+
 // Renumbers the fold ids 0, 1, ... in order; negative ids (never held out) stay as they are.
 std::vector<int> dense_ids(std::vector<int> ids) {
   std::vector<int> sorted;
@@ -119,6 +125,7 @@ Record make_record(const DiagnoseData& data, const DiagnoseOptions& opt, FoldSch
         rec.fold[rec.seg_first[s] + i] = (b[i] + static_cast<int>(s)) % K;
     }
     rec.fold_kind = by_load ? "cycles" : "cycles within load segments";
+    rec.settle = !by_load;
   } else if (std::set<int>(data.segments.begin(), data.segments.end()).size() >= 2) {
     rec.fold = data.segments;
     rec.fold_kind = "segments";
@@ -276,7 +283,23 @@ FoldFit Baseline::fit(const std::vector<char>& train, const Variant& variant) co
   }
   if (std::count(out.free.begin(), out.free.end(), 1) == 0)
     throw IdentificationError("no segment has enough training readings");
-  for (int iteration = 0; iteration < 2; ++iteration) {
+  // Alternate: the shared loop H (a Preisach fit to the training readings mapped through each
+  // segment's offset and range), then each segment's offset and range (a line in H). The start,
+  // a line in the input through each segment's training rows, is biased wherever those rows
+  // are part of a cycle (a rise without its descent), and two alternations leave that bias in:
+  // there (Record::settle) until the prediction settles. Measured, held out by cycles inside
+  // the segments (the lonely stroke's second look) on a clean noise-free record with one cycle
+  // per segment: held-out E_RMS 2.49 % of range after two alternations, 0.87 % after four,
+  // 0.056 % settled (0.052 % held out by load segment), and the running-maximum term had taken
+  // 16.7 % of the bias (`lonely_stroke` on clean data). Settled within 12 alternations there.
+  // Held out by load segment every training segment holds whole cycles, and two alternations
+  // are kept there and for two-load tests held out by cycles: settling everywhere changes every
+  // voltage diagnosis and has not been measured over the kept records (docs/diagnose.md,
+  // session 30).
+  const double settled = kAlternationTolerance * rec_.range;
+  std::vector<double> last(n, 0.0);
+  const int alternations = rec_.settle ? kMaxAlternations : 2;
+  for (int iteration = 0; iteration < alternations; ++iteration) {
     std::vector<double> hn(n, 0.0);
     std::vector<char> ex(n, 1);
     for (std::size_t t = 0; t < n; ++t) {
@@ -301,6 +324,15 @@ FoldFit Baseline::fit(const std::vector<char>& train, const Variant& variant) co
         out.b[s] = b;
       }
     }
+    double change = 0.0;
+    for (std::size_t t = 0; t < n; ++t) {
+      const auto s = static_cast<std::size_t>(rec_.seg[t]);
+      if (!train[t] || !out.free[s]) continue;
+      const double p = out.a[s] + out.b[s] * out.h[t];
+      if (iteration > 0) change = std::max(change, std::abs(p - last[t]));
+      last[t] = p;
+    }
+    if (rec_.settle && iteration > 0 && change < settled) break;
   }
   // Segments without training rows: the quadratic maps through the trained ones.
   std::vector<double> F, A, B;

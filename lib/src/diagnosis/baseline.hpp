@@ -6,8 +6,8 @@
 // power, temperature): the augmented model y = a_s + b_s H[v] with H a Preisach operator
 // restarted in each segment, a_s and b_s free per segment where the segment has training
 // rows, and from quadratic maps f1(F), f2(F) through the trained segments where it has none
-// (paper 000's identification, refined by two alternations between H and the per-segment
-// affine maps).
+// (paper 000's identification, refined by alternations between H and the per-segment affine
+// maps: two, or until settled where the training rows are parts of cycles).
 #include <Eigen/Core>
 #include <functional>
 #include <string>
@@ -34,7 +34,10 @@ struct Record {
   bool trains(std::size_t t, int k) const { return fold[t] != k && fold[t] != kMemoryOnly; }
   int folds = 0;
   std::string fold_kind;  ///< "cycles" or "load segments"
-  double range = 1.0;     ///< output range
+  /// Baseline::fit alternates until the training rows' prediction settles, not twice
+  /// (FoldScheme::cycles_within_segments, where a segment's training rows are part of a cycle).
+  bool settle = false;
+  double range = 1.0;  ///< output range
   std::size_t size() const { return y.size(); }
 };
 
