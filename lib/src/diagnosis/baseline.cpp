@@ -297,7 +297,7 @@ FoldFit Baseline::fit(const std::vector<char>& train, const Variant& variant) co
   // voltage diagnosis and has not been measured over the kept records (docs/diagnose.md,
   // session 30).
   const double settled = kAlternationTolerance * rec_.range;
-  std::vector<double> last(n, 0.0);
+  std::vector<double> last(rec_.settle ? n : 0, 0.0);  // the previous prediction
   const int alternations = rec_.settle ? kMaxAlternations : 2;
   for (int iteration = 0; iteration < alternations; ++iteration) {
     std::vector<double> hn(n, 0.0);
@@ -324,6 +324,7 @@ FoldFit Baseline::fit(const std::vector<char>& train, const Variant& variant) co
         out.b[s] = b;
       }
     }
+    if (!rec_.settle) continue;
     double change = 0.0;
     for (std::size_t t = 0; t < n; ++t) {
       const auto s = static_cast<std::size_t>(rec_.seg[t]);
@@ -332,7 +333,7 @@ FoldFit Baseline::fit(const std::vector<char>& train, const Variant& variant) co
       if (iteration > 0) change = std::max(change, std::abs(p - last[t]));
       last[t] = p;
     }
-    if (rec_.settle && iteration > 0 && change < settled) break;
+    if (iteration > 0 && change < settled) break;
   }
   // Segments without training rows: the quadratic maps through the trained ones.
   std::vector<double> F, A, B;
