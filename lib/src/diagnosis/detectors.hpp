@@ -30,11 +30,17 @@ struct Context {
   std::vector<double> r;                         ///< y - oof (0 on rows never held out)
   std::vector<std::size_t> scored;               ///< rows held out in some fold
   std::vector<std::vector<std::size_t>> blocks;  ///< consecutive scored rows, for the tests
-  double floor = 0.0;                            ///< noise sigma (output units)
-  double white = 0.0;                            ///< the floor's white part
-  double resolution = 0.0;                       ///< sensor step (0: continuous)
-  double rms_before = 0.0;                       ///< % of range
-  ReturnPointSignatures return_point;            ///< model-free (signatures.hpp)
+  /// The noise as the first differences show it (white part and sensor step; output units):
+  /// the detectors' robust scale.
+  double floor = 0.0;
+  double white = 0.0;  ///< the floor's white part
+  /// The noise's lag-one correlation (0 for white noise) and its standard deviation with that
+  /// correlation included: the noise floor the held-out error is judged against (output units).
+  double noise_correlation = 0.0;
+  double noise_sd = 0.0;
+  double resolution = 0.0;             ///< sensor step (0: continuous)
+  double rms_before = 0.0;             ///< % of range
+  ReturnPointSignatures return_point;  ///< model-free (signatures.hpp)
   Signature congruency, holds;
   Signature congruency_robust;  ///< the same, blind to single readings off their neighbours
   Signature dwell;  ///< creep with one reading per hold: residuals against the hold times

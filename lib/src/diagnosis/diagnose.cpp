@@ -185,7 +185,7 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   double rmax = 0.0;
   for (std::size_t t : ctx.scored) rmax = std::max(rmax, std::abs(ctx.r[t]));
   d.max_pct_range = 100.0 * rmax / rec.range;
-  d.noise_floor_pct_range = 100.0 * ctx.floor / rec.range;
+  d.noise_floor_pct_range = 100.0 * ctx.noise_sd / rec.range;
   d.sustained_rms_pct_range = sustained_rms_pct(ctx, ctx.scored);
   std::vector<std::size_t> identified_rows;
   for (std::size_t t : ctx.scored) {
