@@ -105,7 +105,7 @@ TEST(Diagnose, NoiseFreeCleanDataIsNone) {
 // sigma. The misfit between neighbouring readings enters the ratio of spreads too: on these
 // six records at rho 0.6 the floor was 0.60-1.46 sigma (median 0.94), low where the ratio read
 // structure (a load record, eight readings per half cycle), high where the misfit added to
-// the ratio (two voltage records, rho read at the 0.8 cap).
+// the ratio (two voltage records, rho read at 0.76 and the 0.8 cap).
 TEST(Diagnose, NoiseFloorIncludesTheNoiseCorrelationInTime) {
   std::mt19937_64 rng(31);
   int i = 0;
