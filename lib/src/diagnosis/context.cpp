@@ -188,10 +188,13 @@ Context::Context(const Record& record, const Baseline& b, const DiagnoseOptions&
   const std::vector<double> dr = heldout_differences(*this, 1);
   white = dr.size() >= 10 ? mad(dr) / std::sqrt(2.0) : mad(rs);
   resolution = quantisation_step(rec.y);
-  floor = std::sqrt(white * white + resolution * resolution / 12.0);
-  noise_correlation = std::min(spread_ratio_correlation(dr, heldout_differences(*this, 2)),
-                               training_noise_correlation(*this));
-  noise_sd = std::sqrt(white * white / (1.0 - noise_correlation) + resolution * resolution / 12.0);
+  // The noise of one reading, its white part's lag-one correlation `rho` allowed for.
+  auto noise = [&](double rho) {
+    return std::sqrt(white * white / (1.0 - rho) + resolution * resolution / 12.0);
+  };
+  floor = noise(0.0);
+  noise_sd = noise(std::min(spread_ratio_correlation(dr, heldout_differences(*this, 2)),
+                            training_noise_correlation(*this)));
   rms_before = 100.0 * rms(rs) / rec.range;
   return_point = return_point_signatures(rec, floor);
   const CongruencySignatures loops = congruency_signatures(rec);

@@ -34,9 +34,8 @@ struct Context {
   /// the detectors' robust scale.
   double floor = 0.0;
   double white = 0.0;  ///< the floor's white part
-  /// The noise's lag-one correlation (0 for white noise) and its standard deviation with that
-  /// correlation included: the noise floor the held-out error is judged against (output units).
-  double noise_correlation = 0.0;
+  /// The noise's standard deviation with its lag-one correlation in time included: the noise
+  /// floor the held-out error is judged against (output units).
   double noise_sd = 0.0;
   double resolution = 0.0;             ///< sensor step (0: continuous)
   double rms_before = 0.0;             ///< % of range
