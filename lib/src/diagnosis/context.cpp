@@ -39,6 +39,13 @@ void record(Finding& f, const Context& ctx, const Score& s, double p_value) {
   f.detected = f.p_value < ctx.opt.alpha && f.gain_pct >= ctx.opt.min_gain_pct;
 }
 
+// Whether an extension's `heldout_prediction` takes row t from fold k's fit: held out in k,
+// or never held out and k the first fold (in sample, as the outliers' screen reads the
+// baseline's residuals there).
+bool predicted_by(const Record& rec, std::size_t t, int k) {
+  return rec.fold[t] == k || (k == 0 && rec.fold[t] == Record::kAlwaysTrained);
+}
+
 }  // namespace
 
 Score score(Context& ctx, const std::vector<double>& after, const std::vector<char>& use) {
@@ -273,7 +280,7 @@ Finding feature_finding(Context& ctx, const std::string& effect, const std::stri
       if (dead[static_cast<std::size_t>(c)]) beta[c] = 0.0;
     }
     for (std::size_t t = 0; t < rec.size(); ++t) {
-      if (rec.fold[t] != k) continue;
+      if (!predicted_by(rec, t, k)) continue;
       after[t] = fit.pred[t] + beta[0] + Xk.row(static_cast<Eigen::Index>(t)).dot(beta.tail(m));
     }
   }
@@ -301,7 +308,7 @@ Finding model_finding(Context& ctx, const std::string& effect, const std::string
   for (int k = 0; k < rec.folds; ++k) {
     const std::vector<double> p = fold_prediction(k);
     for (std::size_t t = 0; t < rec.size(); ++t) {
-      if (rec.fold[t] == k) after[t] = p[t];
+      if (predicted_by(rec, t, k)) after[t] = p[t];
     }
   }
   const Score s = score(ctx, after);

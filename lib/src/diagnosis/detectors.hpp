@@ -100,6 +100,19 @@ Finding detect_offset_nonlinearity(Context& ctx);
 /// Whether offset_nonlinearity's finding, a signature alone below five loads
 /// (few_loads_signature), is strong enough to name the cause where the residuals are material.
 bool maps_miss_by_signature(const Context& ctx, const Finding& offset);
+/// The outliers' screen of the residuals `ctx.r` (the in-sample residuals of the first fold's
+/// fit on rows never held out), without the robust refit: the readings flagged, how many of
+/// them were confirmed off their protocol point, hold-mates or ramp, their largest scores,
+/// and the screen's p-value (Bonferroni over the readings).
+struct OutlierScreen {
+  std::vector<char> flagged;
+  int count = 0, confirmed = 0, in_holds = 0;
+  double zmax = 0.0;       ///< the largest score off the neighbours
+  double repro_max = 0.0;  ///< the largest confirming score
+  double p_value = 1.0;
+  bool stands_out(double alpha) const { return count > 0 && p_value < alpha; }
+};
+OutlierScreen screen_outliers(const Context& ctx);
 Finding detect_outliers(Context& ctx);
 
 }  // namespace scpkit::diagnosis

@@ -216,62 +216,59 @@ std::vector<double> ramp_scores(const Record& rec, double resolution) {
   return out;
 }
 
+// A reading is flagged more than kFlag robust sigmas off its neighbours (and kFlag / 2 off
+// the residual median); a spike beyond kSure is named even when removing it gains nothing
+// (an isolated reading barely moves a fit on hundreds), beyond kFirm when removing it gains
+// anything, and below kFirm when removing it gains at least min_gain_pct, significantly (at
+// gain_alpha). Measured largest score on records without outliers: 5.5 over 120 rig
+// scenarios of every other effect (creep with readings during holds), 4.9 over 40 records of
+// an independent generator; with 5-20 % spikes 6.7-72 (a 10 % spike on a damped record of
+// 101 readings, one per hold, scored 6.9, as its neighbours' misfit is large).
+//
+// A spike is also confirmed where the protocol repeats: a reading more than kCandidate off
+// its neighbours (and kFlag / 2 off the median) that stands more than kRepro robust sigmas
+// off the readings at the same protocol point elsewhere (ProtocolPoints) is named whatever
+// removing it does to the refit. A model's misfit repeats at the same point of every cycle
+// (and of every load's segment); a spike does not. Measured with a prototype (points keyed
+// by the inputs before and after) on 332 records without outliers (rig and the independent
+// generator, every other effect): no reading with a neighbour score above 4 and a level
+// above 3 stood more than 4.0 off its protocol point; on 64 records with 5-20 % spikes, 54
+// had one beyond 6. Where the readings of one hold are few
+// and noisy the removal of one spike gains nothing measurable, which is what this is for
+// (three fresh records of the independent generator: spikes of 5 and 10 % at a turning value
+// scored 4.6-6.8 off their neighbours and 8-16 off their protocol points, and were named
+// `none`).
+constexpr double kFlag = 6.0, kFirm = 8.0, kSure = 10.0;
+constexpr double kCandidate = 4.0, kRepro = 6.0;
+// A reading within kRepeated robust sigmas of the readings at its protocol point is repeated
+// there: whatever its misfit, every pass through that point shares it, and it is the model's
+// (where a transformation is steeper than the baseline's grid follows), not a spike.
+// kThrough: a branch through the reading (`through`, below).
+constexpr double kRepeated = 1.5, kThrough = 8.0;
+// Off its protocol point on the readings themselves (off_alone, below; the score): kAlone
+// scales of their scatter, and kAside robust sigmas off its neighbours. Measured on 444 load
+// records of the independent generator without spikes (every other effect): the largest such
+// score 4.8. Of 7 spiked load records (5-10 %, seeds 7000-7047) that the residual-based tiers
+// missed, 4 scored beyond 5.5.
+constexpr double kAlone = 5.5, kAside = 3.0;
+// Off its hold-mates (hold_scores): kHold scales of their scatter. Measured with the
+// prototype on 576 records of the two independent generators without spikes (every other
+// effect, creep among them; 24 per kind, seeds 8200-8223): the largest score 5.4, one
+// sensor step that the two-step rule removes; 4.9 otherwise.
+constexpr double kHold = 6.0;
+// Off its ramp (ramp_scores, load tests): kRamp MADs, and outside its neighbours. Measured
+// with a prototype on the load records of the three independent generators with 20 ramp
+// readings or more (sets ind3700-ind4000, b1000-b1300, c100-c400): the largest score on the
+// 154 without spikes 2.2 (4.9 by the distance from the interpolation alone); 19 of the 45
+// spiked ones above 8 (the others' spikes sit in holds, at turning values or inside steep
+// steps, for the other tiers).
+constexpr double kRamp = 8.0;
+
 }  // namespace
 
-Finding detect_outliers(Context& ctx) {
-  // A reading is flagged more than kFlag robust sigmas off its neighbours (and kFlag / 2 off
-  // the residual median); a spike beyond kSure is named even when removing it gains nothing
-  // (an isolated reading barely moves a fit on hundreds), beyond kFirm when removing it gains
-  // anything, and below kFirm when removing it gains at least min_gain_pct, significantly (at
-  // gain_alpha). Measured largest score on records without outliers: 5.5 over 120 rig
-  // scenarios of every other effect (creep with readings during holds), 4.9 over 40 records of
-  // an independent generator; with 5-20 % spikes 6.7-72 (a 10 % spike on a damped record of
-  // 101 readings, one per hold, scored 6.9, as its neighbours' misfit is large).
-  //
-  // A spike is also confirmed where the protocol repeats: a reading more than kCandidate off
-  // its neighbours (and kFlag / 2 off the median) that stands more than kRepro robust sigmas
-  // off the readings at the same protocol point elsewhere (ProtocolPoints) is named whatever
-  // removing it does to the refit. A model's misfit repeats at the same point of every cycle
-  // (and of every load's segment); a spike does not. Measured with a prototype (points keyed
-  // by the inputs before and after) on 332 records without outliers (rig and the independent
-  // generator, every other effect): no reading with a neighbour score above 4 and a level
-  // above 3 stood more than 4.0 off its protocol point; on 64 records with 5-20 % spikes, 54
-  // had one beyond 6. Where the readings of one hold are few
-  // and noisy the removal of one spike gains nothing measurable, which is what this is for
-  // (three fresh records of the independent generator: spikes of 5 and 10 % at a turning value
-  // scored 4.6-6.8 off their neighbours and 8-16 off their protocol points, and were named
-  // `none`).
-  constexpr double kFlag = 6.0, kFirm = 8.0, kSure = 10.0;
-  constexpr double kCandidate = 4.0, kRepro = 6.0;
-  // A reading within kRepeated robust sigmas of the readings at its protocol point is repeated
-  // there: whatever its misfit, every pass through that point shares it, and it is the model's
-  // (where a transformation is steeper than the baseline's grid follows), not a spike.
-  // kThrough: a branch through the reading (`through`, below).
-  constexpr double kRepeated = 1.5, kThrough = 8.0;
-  // Off its protocol point on the readings themselves (off_alone, below; the score): kAlone
-  // scales of their scatter, and kAside robust sigmas off its neighbours. Measured on 444 load
-  // records of the independent generator without spikes (every other effect): the largest such
-  // score 4.8. Of 7 spiked load records (5-10 %, seeds 7000-7047) that the residual-based tiers
-  // missed, 4 scored beyond 5.5.
-  constexpr double kAlone = 5.5, kAside = 3.0;
-  // Off its hold-mates (hold_scores): kHold scales of their scatter. Measured with the
-  // prototype on 576 records of the two independent generators without spikes (every other
-  // effect, creep among them; 24 per kind, seeds 8200-8223): the largest score 5.4, one
-  // sensor step that the two-step rule removes; 4.9 otherwise.
-  constexpr double kHold = 6.0;
-  // Off its ramp (ramp_scores, load tests): kRamp MADs, and outside its neighbours. Measured
-  // with a prototype on the load records of the three independent generators with 20 ramp
-  // readings or more (sets ind3700-ind4000, b1000-b1300, c100-c400): the largest score on the
-  // 154 without spikes 2.2 (4.9 by the distance from the interpolation alone); 19 of the 45
-  // spiked ones above 8 (the others' spikes sit in holds, at turning values or inside steep
-  // steps, for the other tiers).
-  constexpr double kRamp = 8.0;
+OutlierScreen screen_outliers(const Context& ctx) {
   const Record& rec = ctx.rec;
   const std::size_t n = rec.size();
-  Finding f;
-  f.effect = "outliers";
-  f.tested = true;
-  f.extended_model = "baseline refitted without the flagged readings (robust fit)";
   // Isolated spikes: a reading far from its neighbours' mean, measured against the robust scale
   // of that same quantity (structured residuals, smooth in time, do not produce them).
   // Rows never held out (the segments at the extreme loads) are screened on their in-sample
@@ -453,9 +450,11 @@ Finding detect_outliers(Context& ctx) {
   for (std::size_t t = 0; t < n; ++t) {
     lone_guess[t] = guessed[t] && !(t > 0 && guessed[t - 1] && t + 1 < n && guessed[t + 1]);
   }
-  std::vector<char> flagged(n, 0);
-  int count = 0, confirmed = 0, in_holds = 0;
-  double zmax = 0.0, repro_max = 0.0;
+  OutlierScreen out;
+  std::vector<char>& flagged = out.flagged;
+  flagged.assign(n, 0);
+  int &count = out.count, &confirmed = out.confirmed, &in_holds = out.in_holds;
+  double &zmax = out.zmax, &repro_max = out.repro_max;
   const std::vector<double> off_hold = hold_scores(rec, ctx.by_fold.front().pred, ctx.resolution);
   const std::vector<double> off_ramp =
       rec.input_is_load ? ramp_scores(rec, ctx.resolution) : std::vector<double>(n, 0.0);
@@ -525,11 +524,25 @@ Finding detect_outliers(Context& ctx) {
       ++count;
     }
   }
-  f.score = zmax;
   const double n_tests = static_cast<double>(n);
-  f.p_value = std::min(1.0, n_tests * std::erfc(zmax / std::sqrt(2.0)));
+  out.p_value = std::min(1.0, n_tests * std::erfc(zmax / std::sqrt(2.0)));
   if (confirmed > 0)
-    f.p_value = std::min(f.p_value, n_tests * std::erfc(repro_max / std::sqrt(2.0)));
+    out.p_value = std::min(out.p_value, n_tests * std::erfc(repro_max / std::sqrt(2.0)));
+  return out;
+}
+
+Finding detect_outliers(Context& ctx) {
+  const Record& rec = ctx.rec;
+  const std::size_t n = rec.size();
+  Finding f;
+  f.effect = "outliers";
+  f.tested = true;
+  f.extended_model = "baseline refitted without the flagged readings (robust fit)";
+  const OutlierScreen screen = screen_outliers(ctx);
+  const std::vector<char>& flagged = screen.flagged;
+  const int count = screen.count, confirmed = screen.confirmed;
+  f.score = screen.zmax;
+  f.p_value = screen.p_value;
   f.heldout_rms_before = f.heldout_rms_after = ctx.rms_before;
   double gain_p = 1.0;
   if (count > 0) {
@@ -577,6 +590,7 @@ Finding detect_outliers(Context& ctx) {
   // above), so, as for the other signatures, the gain's test is at gain_alpha (intersection-
   // union; measured: a 5 % spike on an independent generator's damped record scored 6.9 and
   // removing it gained 10 % at p = 0.010, which alpha missed by one resample).
+  const double zmax = screen.zmax;
   const bool gains = confirmed > 0 || (zmax > kSure   ? f.gain_pct > -1.0
                                        : zmax > kFirm ? f.gain_pct > 1.0
                                                       : f.gain_pct >= ctx.opt.min_gain_pct &&
@@ -588,7 +602,7 @@ Finding detect_outliers(Context& ctx) {
       "elsewhere, or {:g} off their hold-mates ({} such, {} of them in holds, largest {:.1f}); "
       "without them the held-out E_RMS on the other readings goes from {:.3f} to {:.3f} % of "
       "range (sign-flip p = {:.3f})",
-      count, kFlag, zmax, kCandidate, kRepro, kHold, confirmed, in_holds, repro_max,
+      count, kFlag, zmax, kCandidate, kRepro, kHold, confirmed, screen.in_holds, screen.repro_max,
       f.heldout_rms_before, f.heldout_rms_after, gain_p);
   return f;
 }
