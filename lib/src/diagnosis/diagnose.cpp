@@ -190,7 +190,9 @@ void recheck_outliers(diagnosis::Context& ctx, std::vector<Finding>& findings) {
   if (!outliers || !ext) return;
   diagnosis::Context alt = ctx;
   for (std::size_t t : ctx.scored) alt.r[t] = ctx.rec.y[t] - ext->heldout_prediction[t];
-  // Rows never held out are screened on the first fold's fit (in sample).
+  // Rows never held out are screened on the first fold's fit (in sample). The hold-mates' tier
+  // reads that fit on every row, only to break a tie between mates equally far off, and keeps
+  // the baseline's on the held-out rows.
   for (std::size_t t = 0; t < ctx.rec.size(); ++t) {
     if (ctx.rec.fold[t] == diagnosis::Record::kAlwaysTrained)
       alt.by_fold.front().pred[t] = ext->heldout_prediction[t];
@@ -238,11 +240,12 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   d.findings.push_back(detect_outliers(ctx));
   recheck_outliers(ctx, d.findings);
 
-  // Outliers dominate the residual variance when present, so they are named first. A lonely
-  // stroke shifts the offset of the first load's segment against the others, which a knee in
-  // the maps can mimic (the converse does not hold: on knee data the running-maximum term gains
-  // nothing), so a detected lonely stroke is preferred to offset_nonlinearity. Otherwise the
-  // detected effect whose extension gains most on held-out data.
+  // Outliers dominate the residual variance when present, so they are named first (those that
+  // no other detected extension predicts: recheck_outliers). A lonely stroke shifts the offset
+  // of the first load's segment against the others, which a knee in the maps can mimic (the
+  // converse does not hold: on knee data the running-maximum term gains nothing), so a detected
+  // lonely stroke is preferred to offset_nonlinearity. Otherwise the detected effect whose
+  // extension gains most on held-out data.
   auto detected = [&](const std::string& e) -> const Finding* {
     for (const Finding& f : d.findings) {
       if (f.effect == e && f.detected) return &f;
