@@ -145,8 +145,10 @@ int run_diagnose(const std::vector<std::string>& args) {
   if (m.find(Quantity::kThreadStrain) && m.find(Quantity::kScpStrain))
     return run_ply_mapping(m, vm);
   const MeasurementColumn* drive = augmented_drive(m, vm["input"].as<std::string>());
+  std::string note;
   const Signal in =
-      drive ? select_input(m, drive->name) : select_input(m, vm["input"].as<std::string>());
+      drive ? select_input(m, drive->name) : choose_input(m, vm["input"].as<std::string>(), note);
+  if (!note.empty()) std::cerr << "scpkit diagnose: note: " << note << "\n";
   const Signal out = select_response(m);
   DiagnoseData data;
   data.input = in.values;

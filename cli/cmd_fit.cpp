@@ -74,8 +74,10 @@ int run_fit(const std::vector<std::string>& args) {
   const MeasurementColumn* load_col = m.find(Quantity::kLoad);
   const MeasurementColumn* drive = augmented_drive(m, vm["input"].as<std::string>());
   const bool augmented = drive != nullptr;
-  const Signal in =
-      augmented ? select_input(m, drive->name) : select_input(m, vm["input"].as<std::string>());
+  std::string note;
+  const Signal in = augmented ? select_input(m, drive->name)
+                              : choose_input(m, vm["input"].as<std::string>(), note);
+  if (!note.empty()) std::cerr << "scpkit fit: note: " << note << "\n";
   const bool paired = m.find(Quantity::kThreadStrain) && m.find(Quantity::kScpStrain);
   std::string response_choice = vm["response"].as<std::string>();
   if (response_choice.empty() && paired) response_choice = "thread";

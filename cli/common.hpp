@@ -73,9 +73,16 @@ struct ModelInputs {
   std::vector<char> starts;    ///< empty unless augmented
   std::vector<std::string> warnings;
 };
-/// Tests at several constant loads: the drive column (voltage, power, temperature) that varies
-/// while the load also varies, unless the user asked for the load as input; else nullptr.
+/// Tests at several constant loads: the drive column (voltage, power, temperature; the one asked
+/// for, else the first that varies in that order) while the load varies held in segments (runs
+/// of readings at one load), unless the user asked for the load as input; else nullptr.
 const MeasurementColumn* augmented_drive(const Measurement& m, const std::string& wanted_input);
+
+/// The input of a model with one input (not augmented_drive's case): the one asked for, else
+/// the one that varies. Where several vary, a load swept from reading to reading is the input
+/// (a load test logging voltage or temperature alongside), else the voltage, then power, then
+/// temperature; `note` then says which was chosen. InputError as select_input.
+Signal choose_input(const Measurement& m, const std::string& wanted, std::string& note);
 
 ModelInputs model_inputs(const Measurement& m, const ModelFile& mf);
 

@@ -109,6 +109,17 @@ printf 'load_g,strain_pct\n20,0.1\n20,0.2\n20,0.3\n' >"$work/flat.csv"
 check "no excitation" 3 "flat.csv:1: no varying input" -- "$bin" fit "$work/flat.csv"
 printf 'load_lbs,strain_pct\n20,0.1\n' >"$work/unit.csv"
 check "unknown unit" 3 "unit.csv:1:1: unknown unit 'lbs'" -- "$bin" fit "$work/unit.csv"
+# Unknown columns are ignored (SPEC.md), those named like a quantity too when the file gives
+# that quantity in a known unit; several varying inputs: a load swept from reading to reading
+# is the input of a load test logging temperature, the voltage that of a test at one load.
+awk 'BEGIN { print "time_s,load_g,load_cell_raw,temp_C,strain_pct";
+  for (i = 0; i < 60; i++) { l = 50 * (i % 20 < 10 ? i % 10 : 10 - i % 10);
+    printf "%d,%d,%d,%.1f,%.4f\n", i, l, 3 * l, 23 + (i % 3) / 10, l / 250 }}' >"$work/logged.csv"
+check "a load test logging temperature" 0 "the input is load_g \(the load changes from reading to reading\), not temp_C" -- "$bin" fit "$work/logged.csv" --model linear -o "$work/logged.json"
+awk 'BEGIN { print "load_g,voltage_V,power_W,strain_pct";
+  for (i = 0; i < 60; i++) { v = (i % 20 < 10 ? i % 10 : 10 - i % 10) / 2;
+    printf "100,%.1f,%.3f,%.4f\n", v, v * v / 20, -v / 50 }}' >"$work/powered.csv"
+check "a voltage test logging power" 0 "the input is voltage_V, not power_W" -- "$bin" fit "$work/powered.csv" --model linear -o "$work/powered.json"
 : >"$work/empty.csv"
 check "empty file" 3 "empty.csv:1: empty file" -- "$bin" fit "$work/empty.csv"
 check "missing file" 3 "nope.csv: cannot open" -- "$bin" fit "$work/nope.csv"

@@ -80,6 +80,22 @@ TEST(Measurement, ReadsQuotedFieldsAsRfc4180) {
                    "q.csv:2:3: empty value");
 }
 
+// SPEC.md ignores unknown columns: a name that starts like a known quantity is an unknown unit
+// only where it reads as one unit and the file gives that quantity no other way.
+TEST(Measurement, OtherColumnsWithAQuantitysPrefixAreIgnored) {
+  const Measurement m = Measurement::parse(
+      "time_s,time_stamp,load_g,load_cell_raw,temp_ambient_C,disp_mm,strain_gauge\n"
+      "1,12:00:01,20,x,21.5,0.5,\n2,12:00:02,40,y,21.6,0.7,\n",
+      "e.csv");
+  EXPECT_EQ(m.rows(), 2U);
+  ASSERT_NE(m.find(Quantity::kLoad), nullptr);
+  EXPECT_DOUBLE_EQ(m.find(Quantity::kLoad)->values[1], 40 * 9.80665e-3);
+  EXPECT_EQ(m.find(Quantity::kTemperature), nullptr);
+  EXPECT_EQ(m.find(Quantity::kStrain), nullptr);
+  ASSERT_NE(m.find(Quantity::kDisplacement), nullptr);
+  EXPECT_DOUBLE_EQ(m.find(Quantity::kDisplacement)->values[1], 0.7);
+}
+
 TEST(Measurement, EveryBadInputNamesFileLineAndColumn) {
   EXPECT_THROW_MSG(Measurement::parse("", "e.csv"), InputError, "e.csv:1: empty file");
   EXPECT_THROW_MSG(Measurement::parse("# only: metadata\n", "e.csv"), InputError, "no header");
@@ -99,6 +115,8 @@ TEST(Measurement, EveryBadInputNamesFileLineAndColumn) {
                    "e.csv:2:3: empty value");
   EXPECT_THROW_MSG(Measurement::parse("load_lb,strain_pct\n1,2\n", "e.csv"), InputError,
                    "e.csv:1:1: unknown unit 'lb' in column 'load_lb'");
+  EXPECT_THROW_MSG(Measurement::parse("load_g,disp_in\n1,2\n", "e.csv"), InputError,
+                   "e.csv:1:8: unknown unit 'in' in column 'disp_in'");
   EXPECT_THROW_MSG(Measurement::parse("load_g,load_N,strain\n1,2,3\n", "e.csv"), InputError,
                    "e.csv:1:8: a second load column");
   EXPECT_THROW_MSG(Measurement::parse("load_g,load_g\n1,2\n", "e.csv"), InputError,

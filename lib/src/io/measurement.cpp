@@ -49,13 +49,28 @@ constexpr UnitRule kUnits[] = {
     {"segment", Quantity::kSegment, 1.0},
 };
 
-// Prefixes that name a quantity: a column starting with one but not in kUnits has an
-// unknown unit, which is an error rather than a silently ignored column.
-constexpr std::pair<const char*, const char*> kPrefixes[] = {
-    {"time_", "s, ms, min or h"}, {"dwell_", "s or min"},
-    {"load_", "g, mN, N or kg"},  {"voltage_", "V or mV"},
-    {"power_", "W or mW"},        {"temp_", "C"},
-    {"disp_", "mm, um or m"},     {"strain_", "pct (or plain 'strain' for a fraction)"},
+// Prefixes that name a quantity, with the quantities a column of that prefix may be (the
+// response is strain or displacement). A column starting with one but not in kUnits has an
+// unknown unit, which is an error rather than a silently ignored column, when its rest reads
+// as one unit (no '_') and no column of that quantity is there: then it is the quantity the
+// file meant to give. Otherwise it is another column (`temp_ambient_C`, `load_cell_raw`, or a
+// `time_stamp` beside `time_s`), ignored as SPEC.md has unknown columns.
+struct PrefixRule {
+  const char* prefix;
+  const char* units;
+  Quantity quantity;
+  Quantity also;
+};
+constexpr PrefixRule kPrefixes[] = {
+    {"time_", "s, ms, min or h", Quantity::kTime, Quantity::kTime},
+    {"dwell_", "s or min", Quantity::kDwell, Quantity::kDwell},
+    {"load_", "g, mN, N or kg", Quantity::kLoad, Quantity::kLoad},
+    {"voltage_", "V or mV", Quantity::kVoltage, Quantity::kVoltage},
+    {"power_", "W or mW", Quantity::kPower, Quantity::kPower},
+    {"temp_", "C", Quantity::kTemperature, Quantity::kTemperature},
+    {"disp_", "mm, um or m", Quantity::kDisplacement, Quantity::kStrain},
+    {"strain_", "pct (or plain 'strain' for a fraction)", Quantity::kStrain,
+     Quantity::kDisplacement},
 };
 
 std::string_view trim(std::string_view s) {
@@ -204,21 +219,24 @@ Measurement Measurement::parse(std::string_view text, const std::string& source)
             c.to_canonical = u.factor;
           }
         }
-        if (c.quantity == Quantity::kUnknown) {
-          for (const auto& [prefix, units] : kPrefixes) {
-            if (name.rfind(prefix, 0) == 0) {
-              throw InputError(
-                  source, line_no, starts[i],
-                  fmt::format("unknown unit '{}' in column '{}' (use {})",
-                              name.substr(std::string_view(prefix).size()), name, units));
-            }
-          }
-        } else if (!seen.insert(c.quantity).second && c.quantity != Quantity::kStrain &&
-                   c.quantity != Quantity::kDisplacement) {
+        if (c.quantity != Quantity::kUnknown && !seen.insert(c.quantity).second &&
+            c.quantity != Quantity::kStrain && c.quantity != Quantity::kDisplacement) {
           throw InputError(source, line_no, starts[i],
                            fmt::format("a second {} column '{}'", quantity_word(c.quantity), name));
         }
         m.columns_.push_back(std::move(c));
+      }
+      for (const MeasurementColumn& c : m.columns_) {
+        if (c.quantity != Quantity::kUnknown) continue;
+        for (const PrefixRule& r : kPrefixes) {
+          if (c.name.rfind(r.prefix, 0) != 0) continue;
+          const std::string unit = c.name.substr(std::string_view(r.prefix).size());
+          if (unit.find('_') != std::string::npos || seen.count(r.quantity) || seen.count(r.also))
+            continue;
+          throw InputError(
+              source, line_no, starts[static_cast<std::size_t>(c.position)],
+              fmt::format("unknown unit '{}' in column '{}' (use {})", unit, c.name, r.units));
+        }
       }
       if (end == text.size()) break;
       continue;
