@@ -129,7 +129,8 @@ int run_fit(const std::vector<std::string>& args) {
       ao.lonely.sign = fo.sign;
       if (fo.levels > 0) ao.lonely.levels = fo.levels;
       if (vm.count("max-radius")) ao.gpi.max_radius = vm["max-radius"].as<double>() * in_factor;
-      const AugmentedFit af = fit_augmented(load_col->values, in.values, out.values, blocks, ao);
+      const AugmentedFit af =
+          fit_augmented(held_load_N(m, *load_col), in.values, out.values, blocks, ao);
       aug = af.model;
       op.emplace(af.model.h);
       train = af.train;

@@ -73,6 +73,11 @@ check "map rejects an impossible coil" 2 "spring index" -- "$bin" map "$work/m2.
 for mdl in gpi preisach lonely linear poly2; do
   check "augmented $mdl fit on voltage tests" 0 "augmented $mdl model over 8 constant-load segments" -- "$bin" fit "$ex/voltage-8loads.csv" --model $mdl -o "$work/v-$mdl.json"
 done
+# A load read back by a load cell scatters about each held load: still 8 segments (no segment
+# column), each at its mean load.
+awk -F, -v OFS=, '/^#/ { print; next } !h { h = 1; print $1, $2, $4, $5, $6; next }
+  { print $1, $2, $4 + (NR % 3 - 1) * 0.1, $5, $6 }' "$ex/voltage-8loads.csv" >"$work/v-cell.csv"
+check "augmented fit on a scattered load" 0 "augmented linear model over 8 constant-load segments" -- "$bin" fit "$work/v-cell.csv" --model linear -o "$work/v-cell.json"
 printf 'test = "voltage"\nlength_mm = 70\n[voltage]\nloads_g = [120, 130]\n' >"$work/heavy.toml"
 "$bin" simulate "$work/heavy.toml" -o "$work/v-heavy.csv" >/dev/null
 check "augmented predict warns outside the load range" 0 "outside the identified range" -- "$bin" predict "$work/v-gpi.json" "$work/v-heavy.csv" -o "$work/v-heavy-pred.csv"
