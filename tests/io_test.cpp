@@ -88,6 +88,10 @@ TEST(Measurement, OtherColumnsWithAQuantitysPrefixAreIgnored) {
       "1,12:00:01,20,x,21.5,0.5,\n2,12:00:02,40,y,21.6,0.7,\n",
       "e.csv");
   EXPECT_EQ(m.rows(), 2U);
+  // Unnamed columns too: a row index written by pandas, a trailing comma.
+  const Measurement unnamed = Measurement::parse(",load_g,strain_pct,\n0,1,2,\n1,3,4,\n", "e.csv");
+  ASSERT_NE(unnamed.find(Quantity::kStrain), nullptr);
+  EXPECT_DOUBLE_EQ(unnamed.find(Quantity::kStrain)->values[1], 0.04);
   ASSERT_NE(m.find(Quantity::kLoad), nullptr);
   EXPECT_DOUBLE_EQ(m.find(Quantity::kLoad)->values[1], 40 * 9.80665e-3);
   EXPECT_EQ(m.find(Quantity::kTemperature), nullptr);

@@ -204,9 +204,8 @@ Measurement Measurement::parse(std::string_view text, const std::string& source)
       std::set<Quantity> seen;
       for (std::size_t i = 0; i < fields.size(); ++i) {
         const std::string& name = fields[i];
-        if (name.empty())
-          throw InputError(source, line_no, starts[i], "empty column name in the header");
-        if (!names.insert(name).second) {
+        // An unnamed column is an unknown one (pandas writes its row index so).
+        if (!name.empty() && !names.insert(name).second) {
           throw InputError(source, line_no, starts[i],
                            fmt::format("column '{}' appears twice", name));
         }
