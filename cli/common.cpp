@@ -98,8 +98,8 @@ bool column_varies(const MeasurementColumn* c) {
 }
 
 /// Readings per run of one load, on average, from which the load is held in segments (tests at
-/// constant loads) rather than swept (load tests). Measured over 1078 voltage test files of the
-/// rig and the three independent generators: at least 25; over 772 load test files: at most 4.
+/// constant loads) rather than swept (load tests). Measured over 1125 voltage test files of the
+/// rig and the three independent generators: at least 25; over 759 load test files: at most 4.
 constexpr std::size_t kReadingsPerHeldLoad = 8;
 
 /// A load read back by a load cell scatters about its held value: a reading within this
