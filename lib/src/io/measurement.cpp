@@ -405,6 +405,13 @@ Signal select_response(const Measurement& m, const std::string& wanted) {
     }
     return {"disp_mm", disp->name, disp->values};
   }
+  // A test of one specimen written with its paired-test column (`scp_strain_pct` alone).
+  const MeasurementColumn* thread = m.find(Quantity::kThreadStrain);
+  const MeasurementColumn* scp = m.find(Quantity::kScpStrain);
+  if (wanted.empty() && (thread == nullptr) != (scp == nullptr)) {
+    const MeasurementColumn* c = thread ? thread : scp;
+    return {"strain", c->name, c->values};
+  }
   throw InputError(m.source(), m.header_line(), 0,
                    "no response column: need strain, strain_pct or disp_mm");
 }
