@@ -22,7 +22,8 @@ namespace {
 constexpr const char* kUsage = "scpkit fit DATA.csv [--model preisach] [-o MODEL.json] [options]";
 constexpr const char* kAbout =
     "Identifies a Preisach hysteresis model from a measurement file (docs/data-format.md):\n"
-    "input = the one varying column of load_g/load_mN/load_N, voltage_V, power_W, temp_C;\n"
+    "input = the one varying column of load_g/load_mN/load_N, voltage_V, power_W, temp_C\n"
+    "(several: a load changing from reading to reading, else voltage, power, temp; --input);\n"
     "response = strain, strain_pct, or disp_mm (strain when length_mm metadata is given).\n"
     "A paired file (thread_strain_pct and scp_strain_pct) fits the thread model and the\n"
     "SCP/thread gain. By default the number of levels L and the smoothness are chosen by\n"
