@@ -63,7 +63,10 @@ int run_ply_mapping(const Measurement& m, const po::variables_map& vm) {
   if (!plies || !length)
     throw InputError(m.source(), 0, 0, "needs `plies` and `length_mm` metadata");
   PlyMappingData data;
-  data.load_N = select_input(m, "").values;
+  std::string note;
+  const Signal load = choose_input(m, vm["input"].as<std::string>(), note);
+  if (!note.empty()) std::cerr << "scpkit diagnose: note: " << note << "\n";
+  data.load_N = load.values;
   data.thread_strain = m.find(Quantity::kThreadStrain)->values;
   data.scp_strain = m.find(Quantity::kScpStrain)->values;
   data.plies = *plies;
@@ -92,7 +95,7 @@ int run_ply_mapping(const Measurement& m, const po::variables_map& vm) {
                           {"heldout_rms_after", c.heldout_rms_pct},
                           {"gain_pct", c.gain_pct}});
     }
-    print_json({{"input", select_input(m, "").column},
+    print_json({{"input", load.column},
                 {"mode", "ply_mapping"},
                 {"baseline",
                  {{"model", physics.model},
