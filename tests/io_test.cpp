@@ -88,20 +88,26 @@ TEST(Measurement, OtherColumnsWithAQuantitysPrefixAreIgnored) {
       "1,12:00:01,20,x,21.5,0.5,\n2,12:00:02,40,y,21.6,0.7,\n",
       "e.csv");
   EXPECT_EQ(m.rows(), 2U);
-  // A test of one specimen may name its response as a paired test does.
-  const Signal scp = select_response(Measurement::parse("load_g,scp_strain_pct\n1,2\n", "e.csv"));
-  EXPECT_EQ(scp.column, "scp_strain_pct");
-  EXPECT_DOUBLE_EQ(scp.values[0], 0.02);
-  // Unnamed columns too: a row index written by pandas, a trailing comma.
-  const Measurement unnamed = Measurement::parse(",load_g,strain_pct,\n0,1,2,\n1,3,4,\n", "e.csv");
-  ASSERT_NE(unnamed.find(Quantity::kStrain), nullptr);
-  EXPECT_DOUBLE_EQ(unnamed.find(Quantity::kStrain)->values[1], 0.04);
   ASSERT_NE(m.find(Quantity::kLoad), nullptr);
   EXPECT_DOUBLE_EQ(m.find(Quantity::kLoad)->values[1], 40 * 9.80665e-3);
   EXPECT_EQ(m.find(Quantity::kTemperature), nullptr);
   EXPECT_EQ(m.find(Quantity::kStrain), nullptr);
   ASSERT_NE(m.find(Quantity::kDisplacement), nullptr);
   EXPECT_DOUBLE_EQ(m.find(Quantity::kDisplacement)->values[1], 0.7);
+}
+
+// Unnamed columns are unknown ones too: a row index written by pandas, a trailing comma.
+TEST(Measurement, UnnamedColumnsAreIgnored) {
+  const Measurement unnamed = Measurement::parse(",load_g,strain_pct,\n0,1,2,\n1,3,4,\n", "e.csv");
+  ASSERT_NE(unnamed.find(Quantity::kStrain), nullptr);
+  EXPECT_DOUBLE_EQ(unnamed.find(Quantity::kStrain)->values[1], 0.04);
+}
+
+// A test of one specimen may name its response as a paired test does.
+TEST(Measurement, APairedColumnAloneIsTheResponse) {
+  const Signal scp = select_response(Measurement::parse("load_g,scp_strain_pct\n1,2\n", "e.csv"));
+  EXPECT_EQ(scp.column, "scp_strain_pct");
+  EXPECT_DOUBLE_EQ(scp.values[0], 0.02);
 }
 
 TEST(Measurement, EveryBadInputNamesFileLineAndColumn) {
