@@ -162,7 +162,7 @@ int run_diagnose(const std::vector<std::string>& args) {
   if (const MeasurementColumn* seg = m.find(Quantity::kSegment)) {
     for (double v : seg->values) data.segments.push_back(static_cast<int>(v));
   }
-  if (drive) data.load_N = held_load_N(m, *m.find(Quantity::kLoad));
+  if (drive) data.load_N = held_load_N(m);
   DiagnoseOptions o;
   o.seed = static_cast<std::uint64_t>(std::max(0LL, vm["seed"].as<long long>()));
   const Diagnosis d = [&] {

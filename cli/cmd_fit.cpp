@@ -72,7 +72,6 @@ int run_fit(const std::vector<std::string>& args) {
   const std::string data_path = vm["DATA"].as<std::string>();
   const Measurement m = Measurement::read(data_path);
   // Voltage (power, temperature) tests at several constant loads: the augmented model.
-  const MeasurementColumn* load_col = m.find(Quantity::kLoad);
   const MeasurementColumn* drive = augmented_drive(m, vm["input"].as<std::string>());
   const bool augmented = drive != nullptr;
   std::string note;
@@ -130,8 +129,7 @@ int run_fit(const std::vector<std::string>& args) {
       ao.lonely.sign = fo.sign;
       if (fo.levels > 0) ao.lonely.levels = fo.levels;
       if (vm.count("max-radius")) ao.gpi.max_radius = vm["max-radius"].as<double>() * in_factor;
-      const AugmentedFit af =
-          fit_augmented(held_load_N(m, *load_col), in.values, out.values, blocks, ao);
+      const AugmentedFit af = fit_augmented(held_load_N(m), in.values, out.values, blocks, ao);
       aug = af.model;
       op.emplace(af.model.h);
       train = af.train;

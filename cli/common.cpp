@@ -91,52 +91,6 @@ ResponseColumn find_response(const Measurement& m, const ModelFile& mf) {
 
 namespace {
 
-bool column_varies(const MeasurementColumn* c) {
-  if (!c) return false;
-  const auto [lo, hi] = std::minmax_element(c->values.begin(), c->values.end());
-  return *hi > *lo;
-}
-
-/// Readings per run of one load, on average, from which the load is held in segments (tests at
-/// constant loads) rather than swept (load tests). Measured over 1125 voltage test files of the
-/// rig and the three independent generators: at least 25; over 759 load test files: at most 4.
-constexpr std::size_t kReadingsPerHeldLoad = 8;
-
-/// A load read back by a load cell scatters about its held value: a reading within this
-/// fraction of the load range of its run's mean so far is in that run. Steps of load tests are
-/// 2-8 % of the range (12-50 readings per sweep).
-constexpr double kHeldLoadTolerance = 0.01;
-
-/// Where each run of one load starts: at each change of the load (or of the `segment` column)
-/// when runs so read are held (kReadingsPerHeldLoad), else as kHeldLoadTolerance has them.
-std::vector<std::size_t> load_runs(const Measurement& m, const std::vector<double>& load) {
-  if (load.empty()) return {};
-  const MeasurementColumn* segment = m.find(Quantity::kSegment);
-  const auto [lo, hi] = std::minmax_element(load.begin(), load.end());
-  // tol 0: each change; else a reading farther than tol from its run's mean so far.
-  const auto runs = [&](double tol) {
-    std::vector<std::size_t> starts{0};
-    double sum = load[0];
-    for (std::size_t t = 1; t < load.size(); ++t) {
-      const double mean = sum / static_cast<double>(t - starts.back());
-      const bool moved = tol > 0.0 ? std::abs(load[t] - mean) > tol : load[t] != load[t - 1];
-      if (moved || (segment && segment->values[t] != segment->values[t - 1])) {
-        starts.push_back(t);
-        sum = 0.0;
-      }
-      sum += load[t];
-    }
-    return starts;
-  };
-  std::vector<std::size_t> exact = runs(0.0);
-  if (load.size() >= kReadingsPerHeldLoad * exact.size()) return exact;
-  return runs(kHeldLoadTolerance * (*hi - *lo));
-}
-
-bool load_held(const Measurement& m, const MeasurementColumn& load) {
-  return load.values.size() >= kReadingsPerHeldLoad * load_runs(m, load.values).size();
-}
-
 /// The electrical and thermal inputs, in the order a drive is chosen among those that vary:
 /// the voltage is what a test commands; power and temperature follow from it.
 constexpr Quantity kDrives[] = {Quantity::kVoltage, Quantity::kPower, Quantity::kTemperature};
@@ -145,7 +99,7 @@ constexpr Quantity kDrives[] = {Quantity::kVoltage, Quantity::kPower, Quantity::
 
 const MeasurementColumn* augmented_drive(const Measurement& m, const std::string& wanted_input) {
   const MeasurementColumn* load = m.find(Quantity::kLoad);
-  if (!column_varies(load) || !load_held(m, *load)) return nullptr;
+  if (!load_is_held(m)) return nullptr;
   if (!wanted_input.empty()) {
     const std::string column = select_input(m, wanted_input).column;
     if (column == load->name) return nullptr;
@@ -160,20 +114,6 @@ const MeasurementColumn* augmented_drive(const Measurement& m, const std::string
   return nullptr;
 }
 
-std::vector<double> held_load_N(const Measurement& m, const MeasurementColumn& load) {
-  std::vector<double> held = load.values;
-  std::vector<std::size_t> starts = load_runs(m, held);
-  starts.push_back(held.size());
-  for (std::size_t k = 0; k + 1 < starts.size(); ++k) {
-    const auto first = held.begin() + static_cast<std::ptrdiff_t>(starts[k]);
-    const auto last = held.begin() + static_cast<std::ptrdiff_t>(starts[k + 1]);
-    // A run held exactly keeps its value to the last bit (a mean of equal values may not).
-    if (std::all_of(first, last, [&](double v) { return v == *first; })) continue;
-    std::fill(first, last, std::accumulate(first, last, 0.0) / static_cast<double>(last - first));
-  }
-  return held;
-}
-
 Signal choose_input(const Measurement& m, const std::string& wanted, std::string& note) {
   if (!wanted.empty()) return select_input(m, wanted);
   const MeasurementColumn* load = m.find(Quantity::kLoad);
@@ -184,7 +124,7 @@ Signal choose_input(const Measurement& m, const std::string& wanted, std::string
   if (drives.empty()) return select_input(m, wanted);
   const MeasurementColumn* chosen = nullptr;
   if (column_varies(load)) {
-    if (load_held(m, *load)) return select_input(m, wanted);  // several loads: augmented_drive
+    if (load_is_held(m)) return select_input(m, wanted);  // several loads: augmented_drive
     chosen = load;  // swept reading to reading: a load test, the others logged alongside
   } else if (drives.size() > 1) {
     chosen = drives.front();
@@ -210,7 +150,7 @@ ModelInputs model_inputs(const Measurement& m, const ModelFile& mf) {
                      "the model is augmented (several loads): the file needs a load column "
                      "(load_g, load_mN or load_N)");
   }
-  r.load_N = held_load_N(m, *load);
+  r.load_N = held_load_N(m);
   std::vector<int> ids;
   if (const MeasurementColumn* seg = m.find(Quantity::kSegment)) {
     for (double v : seg->values) ids.push_back(static_cast<int>(v));

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "scpkit/error.hpp"
+#include "scpkit/io/held_load.hpp"
 #include "scpkit/io/measurement.hpp"
 #include "scpkit/io/model_file.hpp"
 #include "scpkit/mechanics/coil.hpp"
@@ -77,12 +78,6 @@ struct ModelInputs {
 /// for, else the first that varies in that order) while the load varies held in segments (runs
 /// of readings at one load), unless the user asked for the load as input; else nullptr.
 const MeasurementColumn* augmented_drive(const Measurement& m, const std::string& wanted_input);
-
-/// The load of tests at several constant loads, each run of readings at one load at its mean,
-/// so that segments and f1(F), f2(F) read one load per segment. A load held exactly is returned
-/// as it is; one that scatters (a load cell's reading) runs while readings stay within 1 % of
-/// the load range of the run's mean (a new `segment` starts a run).
-std::vector<double> held_load_N(const Measurement& m, const MeasurementColumn& load);
 
 /// The input of a model with one input (not augmented_drive's case): the one asked for, else
 /// the one that varies. Where several vary, a load swept from reading to reading is the input

@@ -10,6 +10,7 @@
 
 #include "scpkit/error.hpp"
 #include "scpkit/io/atomic_file.hpp"
+#include "scpkit/io/held_load.hpp"
 
 namespace scpkit {
 namespace {
@@ -332,11 +333,6 @@ constexpr InputKind kInputs[] = {{Quantity::kLoad, "load_N"},
                                  {Quantity::kPower, "power_W"},
                                  {Quantity::kTemperature, "temp_C"}};
 
-bool varies(const std::vector<double>& v) {
-  const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
-  return lo != v.end() && *hi > *lo;
-}
-
 }  // namespace
 
 Signal select_input(const Measurement& m, const std::string& wanted) {
@@ -351,7 +347,7 @@ Signal select_input(const Measurement& m, const std::string& wanted) {
       if (w == k.canonical || w == c->name || w == stem) return {k.canonical, c->name, c->values};
       continue;
     }
-    if (varies(c->values)) present.push_back(&k);
+    if (column_varies(c)) present.push_back(&k);
   }
   if (!wanted.empty()) {
     throw InputError(

@@ -97,8 +97,10 @@ struct DiagnoseData {
   std::vector<double> dwell_s;  ///< optional: time held at this input before the reading
   std::vector<double> input;    ///< load (load tests) or the drive (voltage, power, temperature)
   std::vector<double> output;   ///< response
-  std::vector<double> load_N;   ///< tests at several constant loads: the load of each reading
-  std::vector<int> segments;    ///< optional segment ids
+  /// Tests at several constant loads: the load of each reading, constant over each load segment
+  /// (from a file: held_load_N in scpkit/io/held_load.hpp, which averages a load cell's scatter).
+  std::vector<double> load_N;
+  std::vector<int> segments;  ///< optional segment ids
   /// The input is a load (its first rise depends on the unseen state before the test); false
   /// for a drive (voltage, power, temperature) that starts from rest.
   bool input_is_load = true;
