@@ -2,10 +2,7 @@
 
 #include <fmt/format.h>
 
-#include <algorithm>
-#include <cmath>
 #include <iostream>
-#include <numeric>
 #include <vector>
 
 namespace scpkit::cli {

@@ -8,12 +8,6 @@
 
 namespace scpkit {
 
-bool column_varies(const MeasurementColumn* column) {
-  if (!column || column->values.empty()) return false;
-  const auto [lo, hi] = std::minmax_element(column->values.begin(), column->values.end());
-  return *hi > *lo;
-}
-
 std::vector<std::size_t> load_runs(const Measurement& m) {
   const MeasurementColumn* column = m.find(Quantity::kLoad);
   if (!column || column->values.empty()) return {};

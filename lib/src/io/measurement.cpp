@@ -10,7 +10,6 @@
 
 #include "scpkit/error.hpp"
 #include "scpkit/io/atomic_file.hpp"
-#include "scpkit/io/held_load.hpp"
 
 namespace scpkit {
 namespace {
@@ -334,6 +333,12 @@ constexpr InputKind kInputs[] = {{Quantity::kLoad, "load_N"},
                                  {Quantity::kTemperature, "temp_C"}};
 
 }  // namespace
+
+bool column_varies(const MeasurementColumn* column) {
+  if (!column || column->values.empty()) return false;
+  const auto [lo, hi] = std::minmax_element(column->values.begin(), column->values.end());
+  return *hi > *lo;
+}
 
 Signal select_input(const Measurement& m, const std::string& wanted) {
   std::vector<const InputKind*> present;

@@ -20,9 +20,6 @@ inline constexpr std::size_t kReadingsPerHeldLoad = 8;
 /// 2-8 % of the range (12-50 readings per sweep).
 inline constexpr double kHeldLoadTolerance = 0.01;
 
-/// True when the column is present and its values are not all equal.
-bool column_varies(const MeasurementColumn* column);
-
 /// Where each run of one load starts (row indices, the first 0): at each change of the load or
 /// of the `segment` column when runs so read are held (kReadingsPerHeldLoad readings each on
 /// average), else at each reading farther than kHeldLoadTolerance of the load range from its

@@ -84,6 +84,9 @@ struct Signal {
   std::vector<double> values;
 };
 
+/// True when the column is present and its values are not all equal.
+bool column_varies(const MeasurementColumn* column);
+
 /// The hysteresis input: `wanted` (a canonical name) when given, else the one input column
 /// that varies. InputError when none or several qualify.
 Signal select_input(const Measurement& m, const std::string& wanted = "");
