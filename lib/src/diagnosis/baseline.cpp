@@ -227,14 +227,18 @@ Baseline::Baseline(const Record& rec, const PreisachFitOptions& initial) : rec_(
   options_.sign = full.summary.sign;
   options_.lo = full.input_min;
   options_.hi = full.input_max;
+  options_.reversible = full.summary.reversible ? PreisachFitOptions::Reversible::kOn
+                                                : PreisachFitOptions::Reversible::kOff;
   options_.nnls = initial.nnls;
 }
 
 std::string Baseline::name() const {
+  const bool reversible = options_.reversible == PreisachFitOptions::Reversible::kOn;
   return rec_.several_loads
-             ? fmt::format("augmented preisach (y = f1(F) + f2(F) H[v], quadratic maps, L = {})",
-                           options_.levels)
-             : fmt::format("preisach (L = {})", options_.levels);
+             ? fmt::format("augmented preisach (y = f1(F) + f2(F) H[v], quadratic maps, L = {}{})",
+                           options_.levels, reversible ? ", H with a reversible term" : "")
+             : fmt::format("preisach (L = {}{})", options_.levels,
+                           reversible ? ", with a reversible term" : "");
 }
 
 FoldFit Baseline::fit(const std::vector<char>& train, const Variant& variant) const {
@@ -245,12 +249,13 @@ FoldFit Baseline::fit(const std::vector<char>& train, const Variant& variant) co
   FoldFit out;
   std::vector<char> exclude(n);
   for (std::size_t t = 0; t < n; ++t) exclude[t] = train[t] ? 0 : 1;
-  auto simulate = [&](const PreisachModel& m) {
+  auto simulate = [&](const PreisachFit& fit) {
+    const PreisachModel& m = fit.model;
     Eigen::VectorXd p(static_cast<Eigen::Index>(n));
     for (std::size_t s = 0; s < rec_.seg_first.size(); ++s) {
       PreisachState st = PreisachState::after_cycle(m.grid(), *options_.lo, *options_.hi);
       for (std::size_t t = rec_.seg_first[s]; t < rec_.seg_first[s] + rec_.seg_count[s]; ++t)
-        p[static_cast<Eigen::Index>(t)] = m.step(st, u[t]);
+        p[static_cast<Eigen::Index>(t)] = m.step(st, u[t]) + fit.reversible_term(u[t]);
     }
     if (filter) filter(p);
     return std::vector<double>(p.data(), p.data() + p.size());
@@ -260,7 +265,7 @@ FoldFit Baseline::fit(const std::vector<char>& train, const Variant& variant) co
   if (variant.quick) o.grid_shifts = 1;
   if (!rec_.several_loads) {
     o.exclude = exclude;
-    out.pred = simulate(fit_preisach(u, y, {}, o).model);
+    out.pred = simulate(fit_preisach(u, y, {}, o));
     return out;
   }
   const std::size_t S = rec_.seg_first.size();
@@ -309,7 +314,7 @@ FoldFit Baseline::fit(const std::vector<char>& train, const Variant& variant) co
       ex[t] = 0;
     }
     o.exclude = ex;
-    out.h = simulate(fit_preisach(u, hn, rec_.seg, o).model);
+    out.h = simulate(fit_preisach(u, hn, rec_.seg, o));
     for (std::size_t s = 0; s < S; ++s) {
       if (!out.free[s]) continue;
       std::vector<double> hs, ys;

@@ -16,23 +16,24 @@
 namespace scpkit {
 namespace {
 
-// The linear problem for one grid: per-block normal equations of [sign * S, 1] and the
-// smoothness penalty matrix. Unknowns: cell masses (times sign), then the bias.
+// The linear problem for one grid: per-block normal equations of [sign * S, 1] (and, with the
+// reversible term, sign * (u - lo) / (hi - lo)) and the smoothness penalty matrix. Unknowns:
+// cell masses (times sign), the bias, then r (times sign).
 struct Design {
   PreisachGrid grid;
-  Eigen::MatrixXd A;                  // N x (cells + 1)
+  Eigen::MatrixXd A;                  // N x (cells + 1 + reversible)
   std::vector<Eigen::MatrixXd> gram;  // per block, unscaled A_b' A_b
   std::vector<Eigen::VectorXd> rhs;   // per block, A_b' y_b
   std::vector<int> rows;              // per block, sample count
-  Eigen::MatrixXd penalty;            // (cells + 1)^2, L^4 / N_pairs * D'D
+  Eigen::MatrixXd penalty;            // unknowns^2, L^4 / N_pairs * D'D
   int unexcited = 0;
-  int rank = 0;  // numerical rank of [S, 1]
+  int rank = 0;  // numerical rank of the regressor
+  int unknowns() const { return static_cast<int>(A.cols()); }
 };
 
-Eigen::MatrixXd smoothness_penalty(const PreisachGrid& grid) {
+Eigen::MatrixXd smoothness_penalty(const PreisachGrid& grid, int unknowns) {
   const int L = grid.levels;
-  const int p = grid.cells();
-  Eigen::MatrixXd R = Eigen::MatrixXd::Zero(p + 1, p + 1);
+  Eigen::MatrixXd R = Eigen::MatrixXd::Zero(unknowns, unknowns);
   int pairs = 0;
   auto add = [&](int i0, int j0, int i1, int j1) {
     const int a = grid.cell_index(i0, j0), b = grid.cell_index(i1, j1);
@@ -58,7 +59,8 @@ Design make_design(const PreisachGrid& grid, int sign, std::span<const double> i
                    std::span<const double> output, const std::vector<int>& block_of, int nblocks,
                    bool with_rank, bool restart, const std::vector<int>& segment_of,
                    const std::function<void(Eigen::Ref<Eigen::VectorXd>)>& filter,
-                   const std::optional<std::pair<double, double>>& cycle) {
+                   const std::optional<std::pair<double, double>>& cycle,
+                   const std::optional<std::pair<double, double>>& reversible) {
   Design d;
   d.grid = grid;
   const auto n = static_cast<Eigen::Index>(input.size());
@@ -68,7 +70,8 @@ Design make_design(const PreisachGrid& grid, int sign, std::span<const double> i
                  : PreisachState::negative_saturation(grid);
   };
   PreisachState state = initial();
-  d.A.resize(n, p + 1);
+  const int m = p + 1 + (reversible ? 1 : 0);
+  d.A.resize(n, m);
   Eigen::VectorXd row(p);
   for (Eigen::Index t = 0; t < n; ++t) {
     if (restart && t > 0 && segment_of[t] != segment_of[t - 1]) state = initial();
@@ -77,15 +80,19 @@ Design make_design(const PreisachGrid& grid, int sign, std::span<const double> i
     d.A.row(t).head(p) = row.transpose() * static_cast<double>(sign);
   }
   d.A.col(p).setOnes();
+  if (reversible) {
+    const auto [lo, hi] = *reversible;
+    for (Eigen::Index t = 0; t < n; ++t) d.A(t, p + 1) = sign * (input[t] - lo) / (hi - lo);
+  }
   if (filter) {
-    for (Eigen::Index k = 0; k <= p; ++k) filter(d.A.col(k));
+    for (Eigen::Index k = 0; k < m; ++k) filter(d.A.col(k));
   }
   for (int k = 0; k < p; ++k) {
     if (d.A.col(k).maxCoeff() - d.A.col(k).minCoeff() < 1e-9) ++d.unexcited;
   }
   const Eigen::Map<const Eigen::VectorXd> y(output.data(), n);
-  d.gram.assign(nblocks, Eigen::MatrixXd::Zero(p + 1, p + 1));
-  d.rhs.assign(nblocks, Eigen::VectorXd::Zero(p + 1));
+  d.gram.assign(nblocks, Eigen::MatrixXd::Zero(m, m));
+  d.rhs.assign(nblocks, Eigen::VectorXd::Zero(m));
   d.rows.assign(nblocks, 0);
   for (int b = 0; b < nblocks; ++b) {
     std::vector<Eigen::Index> idx;
@@ -94,7 +101,7 @@ Design make_design(const PreisachGrid& grid, int sign, std::span<const double> i
     }
     d.rows[b] = static_cast<int>(idx.size());
     if (idx.empty()) continue;
-    Eigen::MatrixXd Ab(static_cast<Eigen::Index>(idx.size()), p + 1);
+    Eigen::MatrixXd Ab(static_cast<Eigen::Index>(idx.size()), m);
     Eigen::VectorXd yb(static_cast<Eigen::Index>(idx.size()));
     for (std::size_t r = 0; r < idx.size(); ++r) {
       Ab.row(static_cast<Eigen::Index>(r)) = d.A.row(idx[r]);
@@ -104,10 +111,10 @@ Design make_design(const PreisachGrid& grid, int sign, std::span<const double> i
     d.gram[b] = d.gram[b].selfadjointView<Eigen::Lower>();
     d.rhs[b] = Ab.transpose() * yb;
   }
-  d.penalty = smoothness_penalty(grid);
+  d.penalty = smoothness_penalty(grid, m);
   if (!with_rank) return d;
   // Numerical rank of the regressor from the pivoted LDL' of its Gram matrix.
-  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(p + 1, p + 1);
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(m, m);
   for (const auto& g : d.gram) G += g;
   const Eigen::VectorXd piv = G.ldlt().vectorD().cwiseAbs();
   const double pmax = piv.maxCoeff();
@@ -119,8 +126,9 @@ Design make_design(const PreisachGrid& grid, int sign, std::span<const double> i
 NnlsResult solve_design(const Design& d, double lambda, int skip, const NnlsOptions& nnls,
                         const Eigen::VectorXd& warm = Eigen::VectorXd()) {
   const int p = d.grid.cells();
-  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(p + 1, p + 1);
-  Eigen::VectorXd f = Eigen::VectorXd::Zero(p + 1);
+  const int m = d.unknowns();
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(m, m);
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(m);
   int rows = 0;
   for (std::size_t b = 0; b < d.gram.size(); ++b) {
     if (static_cast<int>(b) == skip) continue;
@@ -132,8 +140,8 @@ NnlsResult solve_design(const Design& d, double lambda, int skip, const NnlsOpti
   G *= inv_n;
   f *= inv_n;
   G += lambda * d.penalty;
-  std::vector<bool> constrained(static_cast<std::size_t>(p + 1), true);
-  constrained[p] = false;
+  std::vector<bool> constrained(static_cast<std::size_t>(m), true);
+  constrained[p] = false;  // the bias; the reversible term, like the cells, has the sign
   return solve_nnls(G, f, constrained, nnls, warm);
 }
 
@@ -338,7 +346,8 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
       options.levels > 0 ? std::vector<int>{options.levels} : options.candidate_levels;
   std::vector<double> lambdas = options.smoothness >= 0.0 ? std::vector<double>{options.smoothness}
                                                           : options.candidate_smoothness;
-  const bool run_cv = levels.size() > 1 || lambdas.size() > 1;
+  const bool run_cv = levels.size() > 1 || lambdas.size() > 1 ||
+                      options.reversible == PreisachFitOptions::Reversible::kChosen;
   // Never offer more unknowns than the data can carry: half the samples without
   // regularisation, twice the samples with it (the smoothness term adds the rest).
   auto too_big = [&](int L, double lambda) {
@@ -356,49 +365,61 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
   const bool restart = options.restart_at_blocks && !blocks.empty();
   std::optional<std::pair<double, double>> cycle;
   if (options.precondition) cycle = std::pair{base.lo, base.hi};
-  auto designs_for = [&](int L, bool with_rank) {
+  using Reversible = PreisachFitOptions::Reversible;
+  std::vector<bool> reversibles;
+  if (options.reversible != Reversible::kOn) reversibles.push_back(false);
+  if (options.reversible != Reversible::kOff) reversibles.push_back(true);
+  auto designs_for = [&](int L, bool with_rank, bool with_reversible) {
+    std::optional<std::pair<double, double>> reversible;
+    if (with_reversible) reversible = std::pair{base.lo, base.hi};
     std::vector<Design> shifts;
     for (int k = 0; k < S; ++k) {
       shifts.push_back(make_design(shifted_grid(base, L, k, S), sign, input, output, block_of,
                                    nblocks, with_rank && k == 0, restart, segment_of,
-                                   options.output_filter, cycle));
+                                   options.output_filter, cycle, reversible));
     }
     return shifts;
   };
   std::sort(lambdas.begin(), lambdas.end());
   int chosen_levels = levels.front();
   double chosen_lambda = lambdas.front();
+  bool chosen_reversible = reversibles.front();
   if (run_cv) {
     double best = std::numeric_limits<double>::infinity();
-    for (int L : levels) {
-      std::vector<double> lams;
-      for (double lam : lambdas) {
-        if (!too_big(L, lam)) lams.push_back(lam);
-      }
-      if (lams.empty()) continue;
-      const std::vector<double> cv = heldout_rms_pct(designs_for(L, false), lams, block_of,
-                                                     eligible, output, range, options.nnls);
-      for (std::size_t l = 0; l < lams.size(); ++l) {
-        summary.cross_validation.push_back({L, lams[l], cv[l]});
-        if (cv[l] < best) {
-          best = cv[l];
-          chosen_levels = L;
-          chosen_lambda = lams[l];
+    for (bool rev : reversibles) {
+      for (int L : levels) {
+        std::vector<double> lams;
+        for (double lam : lambdas) {
+          if (!too_big(L, lam)) lams.push_back(lam);
+        }
+        if (lams.empty()) continue;
+        const std::vector<double> cv = heldout_rms_pct(designs_for(L, false, rev), lams, block_of,
+                                                       eligible, output, range, options.nnls);
+        for (std::size_t l = 0; l < lams.size(); ++l) {
+          summary.cross_validation.push_back({L, lams[l], rev, cv[l]});
+          if (cv[l] < best) {
+            best = cv[l];
+            chosen_levels = L;
+            chosen_lambda = lams[l];
+            chosen_reversible = rev;
+          }
         }
       }
     }
     summary.cv_rms_pct_range = best;
   }
 
-  const std::vector<Design> shifts = designs_for(chosen_levels, true);
+  const std::vector<Design> shifts = designs_for(chosen_levels, true, chosen_reversible);
   std::vector<PreisachModel> models;
   Eigen::VectorXd fitted = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(n));
   bool converged = true;
   std::string message;
+  double reversible_coef = 0.0;
   for (const Design& d : shifts) {
     const NnlsResult r = solve_design(d, chosen_lambda, -1, options.nnls);
     const int p = d.grid.cells();
     models.emplace_back(d.grid, r.x.head(p) * static_cast<double>(sign), r.x[p]);
+    if (chosen_reversible) reversible_coef += sign * r.x[p + 1] / static_cast<double>(S);
     fitted += d.A * r.x / static_cast<double>(S);
     converged = converged && r.converged;
     summary.nnls_iterations += r.iterations;
@@ -412,9 +433,10 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
   summary.levels = chosen_levels;
   summary.grid_shifts = S;
   summary.smoothness = chosen_lambda;
+  summary.reversible = chosen_reversible;
   summary.cells = p;
   summary.unexcited_cells = d.unexcited;
-  summary.unidentified_directions = p + 1 - d.rank;
+  summary.unidentified_directions = d.unknowns() - d.rank;
   summary.termination = converged ? PreisachFitSummary::Termination::kConverged
                                   : PreisachFitSummary::Termination::kNoConvergence;
   {
@@ -435,21 +457,22 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
   }
   if (summary.unidentified_directions > 0) {
     summary.warnings.push_back(fmt::format(
-        "the data identify only {} of {} unknowns (cells + bias): cells that always switch "
+        "the data identify only {} of {} unknowns (cells + bias{}): cells that always switch "
         "together share their mass arbitrarily{}",
-        d.rank, p + 1, chosen_lambda > 0.0 ? ", resolved here by the smoothness term" : ""));
+        d.rank, d.unknowns(), chosen_reversible ? " + reversible term" : "",
+        chosen_lambda > 0.0 ? ", resolved here by the smoothness term" : ""));
   }
   if (!converged) summary.warnings.push_back(message);
   summary.message = message;
-  return {std::move(model), std::move(summary), base.lo, base.hi};
+  return {std::move(model), std::move(summary), base.lo, base.hi, reversible_coef};
 }
 
 std::string PreisachFitSummary::BriefReport() const {
   std::string s = fmt::format(
-      "Preisach fit: L = {}{} ({} cells, {} unexcited), smoothness {:g}, sign {:+d}, {}\n"
+      "Preisach fit: L = {}{} ({} cells, {} unexcited){}, smoothness {:g}, sign {:+d}, {}\n"
       "  identification: E_max {:.3f} %, E_RMS {:.3f} % of the response range",
       levels, grid_shifts > 1 ? fmt::format(", averaged over {} shifted grids", grid_shifts) : "",
-      cells, unexcited_cells, smoothness, sign,
+      cells, unexcited_cells, reversible ? " + a reversible term" : "", smoothness, sign,
       termination == Termination::kConverged ? "converged" : "NOT converged", train.max_pct_range,
       train.rms_pct_range);
   if (cv_rms_pct_range >= 0.0) {

@@ -88,6 +88,8 @@ struct DiagnoseOptions {
   double min_gain_pct = 5.0;  ///< an extension must gain at least this on held-out data
   std::uint64_t seed = 1;
   /// How the baseline is identified: L and smoothness chosen by cross-validation unless set.
+  /// `baseline.reversible = kChosen` adds a reversible term where cross-validation takes it
+  /// (off by default: measured in docs/diagnose.md, session 35).
   PreisachFitOptions baseline = diagnose_baseline_options();
 };
 

@@ -55,6 +55,14 @@ struct PreisachFitOptions {
   /// least-squares problem. diagnose fits a Kelvin creep term this way. Empty = identity.
   /// The returned model is Gamma; predictions are L applied to its output.
   std::function<void(Eigen::Ref<Eigen::VectorXd>)> output_filter;
+  /// A reversible term beside the operator: y = Gamma[u] + r (u - lo) / (hi - lo), with
+  /// sign * r >= 0, one more column of the least squares (Mayergoyz's reversible component).
+  /// A discrete grid follows a response linear in the input only as the steps of its diagonal
+  /// cells; this term follows it exactly. kChosen: with or without, by cross-validation
+  /// alongside L and lambda (diagnose's baseline). The returned model is Gamma;
+  /// PreisachFit::reversible_term gives the term.
+  enum class Reversible { kOff, kOn, kChosen };
+  Reversible reversible = Reversible::kOff;
   NnlsOptions nnls;
 
   /// False (with the reason) for impossible settings.
@@ -64,6 +72,7 @@ struct PreisachFitOptions {
 struct CrossValidationPoint {
   int levels = 0;
   double smoothness = 0.0;
+  bool reversible = false;
   double rms_pct_range = 0.0;  ///< pooled held-out RMS error, % of output range
 };
 
@@ -73,6 +82,7 @@ struct PreisachFitSummary {
   int levels = 0;       ///< L of each shifted grid (the model's own grid is finer when S > 1)
   int grid_shifts = 1;  ///< S
   double smoothness = 0.0;
+  bool reversible = false;  ///< the reversible term was fitted
   int sign = 1;
   int cells = 0;                    ///< cells of one L grid
   int unexcited_cells = 0;          ///< cells whose signed area never changes in the data
@@ -95,6 +105,12 @@ struct PreisachFit {
   PreisachFitSummary summary;
   double input_min = 0.0;  ///< the identified input range (the model's grid may extend beyond)
   double input_max = 0.0;
+  /// r of PreisachFitOptions::reversible (0 without the term), averaged over the shifted grids.
+  double reversible = 0.0;
+  /// The reversible term at input u: r (u - input_min) / (input_max - input_min).
+  double reversible_term(double u) const {
+    return reversible * (u - input_min) / (input_max - input_min);
+  }
 };
 
 /// Identifies a Preisach model. `blocks` (optional, one id per sample) names the segments used
