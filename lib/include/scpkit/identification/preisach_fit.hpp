@@ -59,8 +59,9 @@ struct PreisachFitOptions {
   /// sign * r >= 0, one more column of the least squares (Mayergoyz's reversible component).
   /// A discrete grid follows a response linear in the input only as the steps of its diagonal
   /// cells; this term follows it exactly. kChosen: with or without, by cross-validation
-  /// alongside L and lambda (diagnose's baseline). The returned model is Gamma;
-  /// PreisachFit::reversible_term gives the term.
+  /// alongside L and lambda; the term is taken where its best held-out error beats the best
+  /// without by more than one standard error over the held-out blocks (diagnose's baseline
+  /// option). The returned model is Gamma; PreisachFit::reversible_term gives the term.
   enum class Reversible { kOff, kOn, kChosen };
   Reversible reversible = Reversible::kOff;
   NnlsOptions nnls;
