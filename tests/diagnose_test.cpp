@@ -618,6 +618,32 @@ TEST(Diagnose, ReversibleTermLowersTheBaselinesHeldOutError) {
   }
 }
 
+// Without a clock (no time_s or dwell_s) the time is the reading index, and creep, a dependence
+// on the time held, is not tested: a lag per reading is a memory of the path. The same readings
+// with a clock are tested. Seed 76 of ShortRecordsAreCutIntoMoreFolds, clean, was named `creep`
+// with the reversible term in its baseline (a Kelvin element in reading time gained 16.6 %).
+TEST(Diagnose, CreepIsNotTestedWithoutAClock) {
+  auto creep_of = [](const Diagnosis& d) {
+    for (const Finding& f : d.findings) {
+      if (f.effect == "creep") return f;
+    }
+    return Finding{};
+  };
+  for (unsigned seed = 1; seed <= 4; ++seed) {
+    DiagnoseData data = random_turns(seed, 0.0);
+    const Finding without = creep_of(diagnose(data, DiagnoseOptions{}));
+    EXPECT_FALSE(without.tested) << "seed " << seed;
+    EXPECT_NE(without.evidence.find("no time"), std::string::npos) << without.evidence;
+    for (std::size_t t = 0; t < data.input.size(); ++t)
+      data.time_s.push_back(10.0 * static_cast<double>(t));
+    EXPECT_TRUE(creep_of(diagnose(data, DiagnoseOptions{})).tested) << "seed " << seed;
+  }
+  DiagnoseOptions with_term;
+  with_term.baseline.reversible = PreisachFitOptions::Reversible::kChosen;
+  const Diagnosis d = diagnose(random_turns(76, 0.0, 24, 3), with_term);
+  EXPECT_EQ(d.cause, "none") << d.cause_note;
+}
+
 // A short record whose extreme inputs occur in few cycles leaves few held-out readings within
 // the inputs their folds trained on: it is cut into more, shorter folds rather than refused
 // (a fresh independent-generator load record of 43 readings was refused with 16 scorable in

@@ -72,6 +72,7 @@ Record make_record(const DiagnoseData& data, const DiagnoseOptions& opt, FoldSch
   rec.time = data.time_s;
   if (rec.time.empty() && !data.dwell_s.empty()) rec.time = scpkit::reading_times_from_dwell(data);
   if (rec.time.empty()) {
+    rec.clocked = false;
     for (std::size_t t = 0; t < n; ++t) rec.time.push_back(static_cast<double>(t));
   }
   std::set<double> loads(data.load_N.begin(), data.load_N.end());

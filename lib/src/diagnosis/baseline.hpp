@@ -20,6 +20,7 @@ namespace scpkit::diagnosis {
 
 struct Record {
   std::vector<double> time, u, y;
+  bool clocked = true;  ///< false: no time_s or dwell_s, `time` is the reading index
   bool several_loads = false;
   bool input_is_load = false;  ///< load tests: the first rise is memory-only (never scored)
   std::vector<int> seg;        ///< segment of each row (0, 1, ...; one segment for load tests)

@@ -159,8 +159,14 @@ Finding prony_creep(Context& ctx, double hold) {
 // readings' own time (the lag behind each step, and how it changes with the hold times).
 Finding kelvin_creep(Context& ctx) {
   const Record& rec = ctx.rec;
+  // Without a clock (no time_s or dwell_s) the time is the reading index, and a lag per reading
+  // is a memory of the input path like the hysteresis itself: creep, a dependence on the time
+  // held, cannot be told from it (measured: a clean random-turn record of 27 readings, seed 76 of
+  // ShortRecordsAreCutIntoMoreFolds, with the reversible term in its baseline, gained 16.6 % at
+  // p = 0.006 from a Kelvin element in reading time; docs/diagnose.md, session 36).
   const double step = reading_step(rec);
-  if (!(step > 0.0)) return not_tested(ctx, "creep", "the readings carry no time");
+  if (!(step > 0.0) || !rec.clocked)
+    return not_tested(ctx, "creep", "the readings carry no time (no time_s or dwell_s column)");
   // Kelvin element in the readings' own time: y = (1 - c) Gamma + c v, v relaxing towards
   // Gamma with time constant tau (restarted at each segment). The model is fitted through the
   // filter (weights stay linear); c and tau chosen on each fold's training rows.
