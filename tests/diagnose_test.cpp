@@ -601,17 +601,17 @@ TEST(Diagnose, RandomTurningPointsAreNotUnexplained) {
 }
 
 // A response half of which is reversible (linear in the load): the baseline with the reversible
-// term, where cross-validation takes it (DiagnoseOptions::baseline.reversible), misses the
-// held-out readings by less than the operator alone, whose diagonal cells follow the line only
-// as steps, and says so in its name. Off by default (docs/diagnose.md, session 35).
+// term, which cross-validation takes (DiagnoseOptions::baseline.reversible, kChosen by
+// default), misses the held-out readings by less than the operator alone, whose diagonal cells
+// follow the line only as steps, and says so in its name.
 TEST(Diagnose, ReversibleTermLowersTheBaselinesHeldOutError) {
   for (unsigned seed = 1; seed <= 6; ++seed) {
     DiagnoseData data = random_turns(seed, 0.0);
     for (std::size_t t = 0; t < data.input.size(); ++t) data.output[t] += 0.01 * data.input[t];
-    const Diagnosis plain = diagnose(data, DiagnoseOptions{});
-    DiagnoseOptions with;
-    with.baseline.reversible = PreisachFitOptions::Reversible::kChosen;
-    const Diagnosis d = diagnose(data, with);
+    DiagnoseOptions operator_alone;
+    operator_alone.baseline.reversible = PreisachFitOptions::Reversible::kOff;
+    const Diagnosis plain = diagnose(data, operator_alone);
+    const Diagnosis d = diagnose(data, DiagnoseOptions{});
     EXPECT_EQ(plain.baseline_model.find("reversible"), std::string::npos);
     EXPECT_NE(d.baseline_model.find("reversible term"), std::string::npos) << d.baseline_model;
     EXPECT_LT(d.rms_pct_range, plain.rms_pct_range) << "seed " << seed;
@@ -638,9 +638,7 @@ TEST(Diagnose, CreepIsNotTestedWithoutAClock) {
       data.time_s.push_back(10.0 * static_cast<double>(t));
     EXPECT_TRUE(creep_of(diagnose(data, DiagnoseOptions{})).tested) << "seed " << seed;
   }
-  DiagnoseOptions with_term;
-  with_term.baseline.reversible = PreisachFitOptions::Reversible::kChosen;
-  const Diagnosis d = diagnose(random_turns(76, 0.0, 24, 3), with_term);
+  const Diagnosis d = diagnose(random_turns(76, 0.0, 24, 3), DiagnoseOptions{});
   EXPECT_EQ(d.cause, "none") << d.cause_note;
 }
 

@@ -74,9 +74,13 @@ struct Diagnosis {
 /// its held-out error follows round-off: cross-validation chose between it and a smoothed fit
 /// on the last digits, so the same record in other units, or shifted by 1e-9 of itself, got
 /// another baseline and, once, another cause (docs/diagnose.md, sessions 24 and 25).
+/// The reversible term is taken where cross-validation takes it by the one-standard-error rule
+/// (`kChosen`): a response partly linear in the input leaves the operator alone a structured
+/// error that diagnose called `unexplained` on clean records (docs/diagnose.md, sessions 35-37).
 inline PreisachFitOptions diagnose_baseline_options() {
   PreisachFitOptions o;
   o.candidate_smoothness = {1e-6, 1e-5, 1e-4, 1e-3};
+  o.reversible = PreisachFitOptions::Reversible::kChosen;
   return o;
 }
 
@@ -87,9 +91,8 @@ struct DiagnoseOptions {
   double gain_alpha = 0.05;   ///< the gain's test, after a significant residual signature
   double min_gain_pct = 5.0;  ///< an extension must gain at least this on held-out data
   std::uint64_t seed = 1;
-  /// How the baseline is identified: L and smoothness chosen by cross-validation unless set.
-  /// `baseline.reversible = kChosen` adds a reversible term where cross-validation takes it
-  /// (off by default: measured in docs/diagnose.md, session 35).
+  /// How the baseline is identified: L, smoothness and the reversible term chosen by
+  /// cross-validation unless set (`baseline.reversible = kOff`: the operator alone).
   PreisachFitOptions baseline = diagnose_baseline_options();
 };
 
