@@ -37,7 +37,10 @@ struct Context {
   /// The noise's standard deviation with its lag-one correlation in time included: the noise
   /// floor the held-out error is judged against (output units).
   double noise_sd = 0.0;
-  double resolution = 0.0;             ///< sensor step (0: continuous)
+  double resolution = 0.0;  ///< sensor step (0: continuous)
+  /// The sensor step dominates the noise (over twice its white part): the same true value
+  /// rounds the same way every time, and a motion below the step is not read at all.
+  bool step_dominates() const { return resolution > 2.0 * white; }
   double rms_before = 0.0;             ///< % of range
   ReturnPointSignatures return_point;  ///< model-free (signatures.hpp)
   Signature congruency, holds;

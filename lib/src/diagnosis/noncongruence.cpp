@@ -82,8 +82,7 @@ Finding detect_noncongruence(Context& ctx) {
   // them (measured: a clean record of the independent generator at a 0.04 mm step and 0.01 mm
   // noise, the map gaining 8.2 % at p = 0.004 with the signature at p = 0.83).
   const bool gains = f.gain_pct >= ctx.opt.min_gain_pct;
-  const bool rounding = ctx.resolution > 2.0 * ctx.white;
-  f.detected = gains && ((gain_p < ctx.opt.alpha && !rounding) ||
+  f.detected = gains && ((gain_p < ctx.opt.alpha && !ctx.step_dominates()) ||
                          (sig.p_value < ctx.opt.alpha && gain_p < ctx.opt.gain_alpha));
   return f;
 }
