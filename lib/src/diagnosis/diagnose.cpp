@@ -261,9 +261,17 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   // follow the hold times (dwell_signature).
   const bool creep_seen =
       creep && (ctx.holds.available || (ctx.dwell.available && ctx.dwell.p_value < opt.alpha));
+  // Non-congruence counts as seen when its model-free signature passes alpha; named by its
+  // map's gain with the signature only at gain_alpha (detect_noncongruence) it competes by
+  // gain like the other gain-only effects (session 38: with a prototype of that route, Fisher's
+  // combination of the two p-values, a rig drift of 12 % whose map gained 0.9 % at p = 0.017,
+  // signature 0.032, was named minor_loop_noncongruence over the trend's 44.9 %).
+  const Finding* nc = detected("minor_loop_noncongruence");
+  const bool nc_seen = nc && ctx.congruency.p_value < opt.alpha;
   for (const char* e : {"outliers", "creep", "minor_loop_noncongruence"}) {
     const Finding* f = detected(e);
     if (f == creep && !creep_seen) continue;
+    if (f == nc && !nc_seen) continue;
     if (!best) best = f;
   }
   // With one reading per hold creep is known by its gain alone: a Kelvin element that starts
