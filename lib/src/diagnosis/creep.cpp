@@ -365,7 +365,6 @@ Finding detect_creep(Context& ctx) {
   // held-out residual variance at p = 0.001 and gaining 11.7 %, named `none` before; no cause
   // changed on the rig's 156 scenarios, the other 143 records of three independent sets and
   // 408 clean records.
-  if (!ctx.holds.available) return f;
   f.evidence += "; " + describe(ctx.holds);
   const bool by_gain = f.detected && ctx.step_dominates();
   f.detected = (ctx.holds.p_value < ctx.opt.alpha && f.gain_pct > 0.0) || by_gain;
