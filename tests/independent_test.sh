@@ -105,6 +105,10 @@
 #   (`creep`). And the clean second-generator record of seed 3425 (staircase, four readings
 #   per hold, no step), where that series gains 16.8 % while the readings during holds do not
 #   move: `none`, as the hold signature says where the sensor resolves the motion.
+# - a 40 % offset knee of the second generator at five loads (seed 2600: 20, 50, 60, 140 and
+#   150 g), `unexplained` while at five loads only the cubic maps were tried (they lose 17.8 %:
+#   the knee at the lowest load bends them away at 140 g); what the maps miss at the held-out
+#   loads, 99 % of the residuals, names it as below five loads (`offset_nonlinearity`).
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -153,6 +157,8 @@ python3 "$src/scripts/independent_cases_b.py" "$work/b" 1 2003 voltage-drift || 
 python3 "$src/scripts/independent_cases_c.py" "$work/c" 1 1700 voltage-creep || exit 1
 python3 "$src/scripts/independent_cases_b.py" "$work/b" 1 2603 load-creep || exit 1
 python3 "$src/scripts/independent_cases_b.py" "$work/b" 1 3425 load-none || exit 1
+python3 "$src/scripts/independent_cases_b.py" "$work/b" 1 2600 voltage-offset_nonlinearity ||
+  exit 1
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -214,5 +220,6 @@ expect "$work/b/voltage-drift-2003.csv" drift
 expect "$work/c/voltage-creep-1700.csv" creep
 expect "$work/b/load-creep-2603.csv" creep
 expect "$work/b/load-none-3425.csv" none
+expect "$work/b/voltage-offset_nonlinearity-2600.csv" offset_nonlinearity
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]

@@ -421,9 +421,10 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   // 1e-4 and robust 0.0017, was `none` at alpha / 10; no record of 192 spiked ones and 40 other
   // moving-Preisach ones changed its name at alpha / 5; the one clean record of 100 with minor
   // loops whose raw p is below alpha / 10 (0.00088) has robust p 0.022.
-  // Below five loads offset_nonlinearity's finding is a signature alone (few_loads_signature
-  // in load_maps.cpp): the share of the held-out residuals that a per-segment affine map of H
-  // explains, named where the residuals are material (maps_miss_by_signature).
+  // Below five loads, and at five where the cubic maps do not name it, offset_nonlinearity's
+  // finding is a signature alone (few_loads_signature in load_maps.cpp): the share of the held-out
+  // residuals that a per-segment affine map of H explains, named where the residuals are material
+  // (maps_miss_by_signature).
   bool maps_miss = false;
   for (const Finding& f : d.findings) {
     if (f.effect == "offset_nonlinearity") maps_miss = maps_miss_by_signature(ctx, f);
@@ -459,7 +460,8 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   } else if (material && maps_miss) {
     name_by_signature("offset_nonlinearity",
                       "the held-out error is material and mostly what the maps miss at the "
-                      "held-out loads, where no map beyond quadratic can be held out");
+                      "held-out loads, which no map beyond quadratic that can be held out "
+                      "there models");
   }
   if ((d.cause == "none" || d.cause == "unexplained") && rec.fold_kind == "load segments") {
     for (Finding& f : d.findings) {
