@@ -101,7 +101,8 @@ Finding detect_noncongruence(Context& ctx);
 Finding detect_load_shape_coupling(Context& ctx);
 Finding detect_offset_nonlinearity(Context& ctx);
 /// Whether offset_nonlinearity's finding, a signature alone below five loads and at five where
-/// the cubic maps do not name it (few_loads_signature), is strong enough to name the cause where the residuals are material.
+/// the cubic maps do not name it (few_loads_signature), is strong enough to name the cause where
+/// the residuals are material.
 bool maps_miss_by_signature(const Context& ctx, const Finding& offset);
 /// The outliers' screen of the residuals `ctx.r` (the in-sample residuals of the first fold's
 /// fit on rows never held out), without the robust refit: the readings flagged, how many of
