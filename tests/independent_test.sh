@@ -109,6 +109,10 @@
 #   150 g), `unexplained` while at five loads only the cubic maps were tried (they lose 17.8 %:
 #   the knee at the lowest load bends them away at 140 g); what the maps miss at the held-out
 #   loads, 99 % of the residuals, names it as below five loads (`offset_nonlinearity`).
+# - third-generator load drifts along ramps between turning points at random (session 39):
+#   seed 6020 (12 %), named `lonely_stroke` while the running-maximum term named load tests by
+#   its gain, and seed 6009 (3 %), `creep` while the drift's size was the two-stage trend's
+#   (gain 11.5 %, a Kelvin element's more; fitted with the baseline the trend gains 54.0 %).
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -159,6 +163,8 @@ python3 "$src/scripts/independent_cases_b.py" "$work/b" 1 2603 load-creep || exi
 python3 "$src/scripts/independent_cases_b.py" "$work/b" 1 3425 load-none || exit 1
 python3 "$src/scripts/independent_cases_b.py" "$work/b" 1 2600 voltage-offset_nonlinearity ||
   exit 1
+python3 "$src/scripts/independent_cases_c.py" "$work/c" 1 6020 load-drift || exit 1
+python3 "$src/scripts/independent_cases_c.py" "$work/c" 1 6009 load-drift || exit 1
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -221,5 +227,7 @@ expect "$work/c/voltage-creep-1700.csv" creep
 expect "$work/b/load-creep-2603.csv" creep
 expect "$work/b/load-none-3425.csv" none
 expect "$work/b/voltage-offset_nonlinearity-2600.csv" offset_nonlinearity
+expect "$work/c/load-drift-6020.csv" drift
+expect "$work/c/load-drift-6009.csv" drift
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]

@@ -3,6 +3,9 @@
 
 #include <Eigen/QR>
 #include <algorithm>
+#include <cmath>
+#include <tuple>
+#include <utility>
 
 #include "detectors.hpp"
 
@@ -81,6 +84,91 @@ Finding drift_in_offset_map(Context& ctx) {
   return f;
 }
 
+// Load tests: the trend fitted with the baseline. The two-stage extension fits the trend to the
+// training residuals of a baseline that has already taken up part of it: where the history of
+// the input changes through the record a Preisach plane fits part of a trend, and the held-out
+// residuals carry more of the trend than the training residuals show. Here each fold's
+// baseline is refitted on the readings less the trend and the trend on the readings less the
+// baseline, in turn (backfitting). The trend is one column, so each round moves it the same
+// fraction of the way to the joint fit (exactly so for a linear least-squares baseline; nearly
+// for NNLS): three rounds on one grid give that fraction and the limit (Aitken's extrapolation),
+// through which the baseline is fitted once more on every grid. Measured (session 39): on two
+// rig load records of a 3 % drift at 0.02 mm noise (TheTrendFittedWithTheBaselineIsTheHiddenDrift)
+// three plain rounds recovered 0.38-0.78 of the drift per fold, ten 0.74-0.96, the three
+// extrapolated 0.79-1.05.
+// Detected where the trend's block-permutation signature on the held-out residuals and the
+// held-out gain are both at alpha (the two-stage extension's gain is taken at gain_alpha: this
+// one refits the baseline, and a clean third-generator record, damped, AR(1) noise, gained
+// 12.3 % at p = 0.030 with per-fold trends of 0.04-0.66 % of the range; the right drifts it
+// names were at p <= 0.005), the gain at least min_gain_pct, and the trend over the record
+// at least the noise of one reading: the backfitted trend gains more than the two-stage one on
+// clean records too where that signature sits at alpha (two clean independent-generator
+// records, trends of 0.6 and 0.3 % of the range against floors of 0.68 and 0.50 %, gained 9.4
+// and 7.8 % at p = 0.001 and 0.004; the two-stage trend 4.8 %).
+Finding trend_fitted_with_baseline(Context& ctx, double signature_p) {
+  const Record& rec = ctx.rec;
+  const double t0 = rec.time.front(), t1 = std::max(rec.time.back(), t0 + 1e-300);
+  auto x = [&](std::size_t t) { return (rec.time[t] - t0) / (t1 - t0); };
+  std::string trends;
+  double trend_sum = 0.0;
+  Finding f = model_finding(
+      ctx, "drift", "baseline fitted with a linear trend in time",
+      [&](int k) {
+        const std::vector<char> train = ctx.train_mask(k);
+        // The trend (c, beta) on the training rows of y - prediction.
+        auto trend_of = [&](const std::vector<double>& pred) {
+          double n = 0.0, sx = 0.0, sr = 0.0, sxx = 0.0, sxr = 0.0;
+          for (std::size_t t = 0; t < rec.size(); ++t) {
+            if (!train[t]) continue;
+            const double r = rec.y[t] - pred[t];
+            n += 1.0;
+            sx += x(t);
+            sr += r;
+            sxx += x(t) * x(t);
+            sxr += x(t) * r;
+          }
+          const double slope = (sxr - sx * sr / n) / std::max(sxx - sx * sx / n, 1e-300);
+          return std::pair{(sr - slope * sx) / n, slope};
+        };
+        std::vector<double> z(rec.size());
+        auto refit = [&](double c, double beta, bool quick) {
+          for (std::size_t t = 0; t < rec.size(); ++t) z[t] = rec.y[t] - c - beta * x(t);
+          return ctx.base.fit(train, {{}, &z, quick}).pred;
+        };
+        std::vector<double> pred = refit(0.0, 0.0, true);
+        double c = 0.0, b[3];
+        for (double& bk : b) {
+          std::tie(c, bk) = trend_of(pred);
+          pred = refit(c, bk, true);
+        }
+        double beta = b[2];
+        const double rho = (b[2] - b[1]) / (b[1] - b[0]);
+        if (std::isfinite(rho) && rho > 0.0 && rho < 0.95)
+          beta = b[1] + (b[2] - b[1]) / (1.0 - rho);
+        pred = refit(c, beta, false);
+        // The offset again, with the baseline's own level settled.
+        double n = 0.0, offset = 0.0;
+        for (std::size_t t = 0; t < rec.size(); ++t) {
+          if (!train[t]) continue;
+          n += 1.0;
+          offset += rec.y[t] - pred[t] - beta * x(t);
+        }
+        c = offset / n;
+        trends += fmt::format("{}{:.3g}", trends.empty() ? "" : ", ", 100.0 * beta / rec.range);
+        trend_sum += beta;
+        for (std::size_t t = 0; t < rec.size(); ++t) pred[t] += c + beta * x(t);
+        return pred;
+      },
+      "a linear trend in time fitted with the baseline (backfitted)");
+  f.extended_model += " (trend over the record per fold, % of range: " + trends + ")";
+  const double trend = std::abs(trend_sum) / rec.folds;
+  f.detected = signature_p < ctx.opt.alpha && f.p_value < ctx.opt.alpha &&
+               f.gain_pct >= ctx.opt.min_gain_pct && trend >= ctx.noise_sd;
+  f.evidence += fmt::format("; the trend over the record {:.2f} % of range, the noise {:.2f} %",
+                            100.0 * trend / rec.range, 100.0 * ctx.noise_sd / rec.range);
+  return f;
+}
+
 }  // namespace
 
 Finding detect_drift(Context& ctx) {
@@ -95,6 +183,7 @@ Finding detect_drift(Context& ctx) {
   if (by_segment) map = drift_in_offset_map(ctx);
   std::vector<double> origin(rec.seg_first.size(), t0);  // each segment's time origin
   if (by_segment) origin = segment_mean_times(rec);
+  double trend_signature_p = 1.0;
   Finding f = feature_finding(
       ctx, "drift",
       by_segment ? "augmented baseline + linear trend in time within each load segment"
@@ -106,8 +195,22 @@ Finding detect_drift(Context& ctx) {
               (rec.time[t] - origin[static_cast<std::size_t>(rec.seg[t])]) / (t1 - t0);
         return X;
       },
-      by_segment ? "a trend in time within each load segment" : "a linear trend in time");
+      by_segment ? "a trend in time within each load segment" : "a linear trend in time",
+      &trend_signature_p);
   if (by_segment && !(f.gain_pct > map.gain_pct)) f = map;
+  if (!by_segment) {
+    // Reported where both are detected and it gains more: it sizes a drift the two-stage
+    // extension found, and does not find one of its own (a clean third-generator record, a
+    // damped protocol whose turning points rise through the record, gained 18.7 % at p = 0.001,
+    // its trend 1.15 % of the range against 0.45 % noise: the baseline's misfit of cycles the
+    // other folds never traversed follows the protocol, and so time; the two-stage trend
+    // gained 1.6 %).
+    Finding joint = trend_fitted_with_baseline(ctx, trend_signature_p);
+    if (f.detected && joint.detected && joint.gain_pct > f.gain_pct) {
+      joint.evidence = f.evidence + "; " + joint.evidence;
+      f = std::move(joint);
+    }
+  }
   const Signature& sig = ctx.return_point.time;
   if (sig.available) {
     f.evidence += "; " + describe(sig);
