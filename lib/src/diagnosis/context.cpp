@@ -226,7 +226,7 @@ Finding not_tested(const Context& ctx, const std::string& effect, const std::str
 }
 
 Finding feature_finding(Context& ctx, const std::string& effect, const std::string& extension,
-                        const Features& features, const std::string& what, double* signature_p) {
+                        const Features& features, const std::string& what) {
   const Record& rec = ctx.rec;
   Finding f;
   f.effect = effect;
@@ -247,7 +247,6 @@ Finding feature_finding(Context& ctx, const std::string& effect, const std::stri
   const std::size_t block = std::max<std::size_t>(4, ctx.scored.size() / 24);
   const double p_signature =
       block_permutation_p(rs, Xs, f.score, block, ctx.opt.permutations, ctx.rng);
-  if (signature_p) *signature_p = p_signature;
   // The extension, fitted on each fold's training rows.
   std::vector<double> after(ctx.oof);
   for (int k = 0; k < rec.folds; ++k) {

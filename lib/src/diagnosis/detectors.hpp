@@ -72,8 +72,7 @@ using Features = std::function<Eigen::MatrixXd(const FoldFit&)>;
 /// An effect seen as a residual signature X: block-permutation test of R^2(r ~ X), and the
 /// two-stage extension y = baseline + X beta (beta on each fold's training rows).
 Finding feature_finding(Context& ctx, const std::string& effect, const std::string& extension,
-                        const Features& features, const std::string& what,
-                        double* signature_p = nullptr);
+                        const Features& features, const std::string& what);
 
 /// An effect whose extension is another model: `fit(train)` predicts every row.
 Finding model_finding(Context& ctx, const std::string& effect, const std::string& extension,
