@@ -98,7 +98,7 @@ TEST(Diagnose, NoiseFreeCleanDataIsNone) {
 // differences spread as sigma sqrt(1 - rho) only, so a floor taken from them alone is 0.63 sigma
 // at rho 0.6, and a clean record's held-out error, at about sigma, passed 2 x floor as material:
 // a third-generator clean record with AR(1) noise (rho 0.6) was `unexplained` that way
-// (docs/diagnose.md, session 31). The floor now includes the noise's lag-one correlation from
+// (docs/diagnose-log.md, session 31). The floor now includes the noise's lag-one correlation from
 // the spreads of its first and second differences. On noise-free rig records with AR(1) noise
 // added: the records are `none`; with white noise the floor is sigma to within the estimate's
 // spread; at rho 0.6 its median is near sigma, where the first differences alone give 0.63
@@ -927,7 +927,7 @@ TEST(Diagnose, ReadingTimesFromDwellReproduceTheClock) {
 // was not closed under y -> -y). Rescaled or shifted, to 1e-6 of themselves (gains to 1e-3
 // points): they did not until session 25, while the baseline's cross-validation offered
 // smoothness 0, whose ill-conditioned fits have held-out errors that follow round-off
-// (docs/diagnose.md, session 24: a clean record chose L = 12 unregularised or L = 16 at 1e-4
+// (docs/diagnose-log.md, session 24: a clean record chose L = 12 unregularised or L = 16 at 1e-4
 // with its response shifted by 1e-9 of itself).
 TEST(Diagnose, TheCauseDoesNotDependOnTheResponsesUnitSignOrZero) {
   // Scenario 0 of the load side has minor loops between the same extrema (the non-congruence

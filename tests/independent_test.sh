@@ -76,7 +76,7 @@
 #   inside every segment, every first rise scored (diagnose.cpp, lonely_within_segments). Seeds
 #   605 and 609, pinned here until session 30, were named by that look only through the bias of
 #   a baseline fit stopped after two alternations (baseline.cpp, Record::settle); settled, they
-#   are `none` (docs/diagnose.md, session 30), and seed 1001 (`none` before) is named. And the clean
+#   are `none` (docs/diagnose-log.md, session 30), and seed 1001 (`none` before) is named. And the clean
 #   second-generator record of seed 1500 (eight loads, random turns), which that second look
 #   named `lonely_stroke` while one fold of three choosing the term sufficed (`none`); and two
 #   voltage creeps of the third generator (seeds 703 and 704, a first-order lag carried across

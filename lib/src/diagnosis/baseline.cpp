@@ -300,7 +300,7 @@ FoldFit Baseline::fit(const std::vector<char>& train, const Variant& variant) co
   // 16.7 % of the bias (`lonely_stroke` on clean data). Settled within 12 alternations there.
   // Held out by load segment every training segment holds whole cycles, and two alternations
   // are kept there and for two-load tests held out by cycles: settling everywhere changes every
-  // voltage diagnosis and has not been measured over the kept records (docs/diagnose.md,
+  // voltage diagnosis and has not been measured over the kept records (docs/diagnose-log.md,
   // session 30).
   const double settled = kAlternationTolerance * rec_.range;
   std::vector<double> last(rec_.settle ? n : 0, 0.0);  // the previous prediction

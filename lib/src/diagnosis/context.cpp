@@ -89,7 +89,7 @@ constexpr double kMaxNoiseCorrelation = 0.8;
 // where the residuals carry structure; the diagnosis takes it on the held-out residuals and on
 // the folds' training residuals (whose fit took up part of the structure) and uses the smaller.
 // Measured on the held-out residuals of 212 third-generator records whose noise is known
-// (10-90 %): white noise 0.00-0.49, AR(1) at rho 0.6 0.26-0.80; docs/diagnose.md, session 31.
+// (10-90 %): white noise 0.00-0.49, AR(1) at rho 0.6 0.26-0.80; docs/diagnose-log.md, session 31.
 double spread_ratio_correlation(const std::vector<double>& d1, const std::vector<double>& d2) {
   if (d1.size() < 10 || d2.size() < 10) return 0.0;
   const double s1 = mad(d1);

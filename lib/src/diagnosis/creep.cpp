@@ -163,7 +163,7 @@ Finding kelvin_creep(Context& ctx) {
   // is a memory of the input path like the hysteresis itself: creep, a dependence on the time
   // held, cannot be told from it (measured: a clean random-turn record of 27 readings, seed 76 of
   // ShortRecordsAreCutIntoMoreFolds, with the reversible term in its baseline, gained 16.6 % at
-  // p = 0.006 from a Kelvin element in reading time; docs/diagnose.md, session 36).
+  // p = 0.006 from a Kelvin element in reading time; docs/diagnose-log.md, session 36).
   const double step = reading_step(rec);
   if (!(step > 0.0) || !rec.clocked)
     return not_tested(ctx, "creep", "the readings carry no time (no time_s or dwell_s column)");

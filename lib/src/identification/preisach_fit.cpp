@@ -247,7 +247,7 @@ HeldoutErrors heldout_errors(const std::vector<Design>& shifts, const std::vecto
 // by more than one standard error of the paired differences: the one-standard-error rule. A
 // significance test has no power over the three to five blocks of a short record (at 5 % a
 // paired t-test refused the term on records half reversible whose held-out error it cut six-
-// fold; docs/diagnose.md, session 36).
+// fold; docs/diagnose-log.md, session 36).
 bool beats_by_one_se(const std::vector<double>& without, const std::vector<double>& with) {
   const std::size_t m = without.size();
   if (m < 2 || with.size() != m) return false;

@@ -73,10 +73,11 @@ struct Diagnosis {
 /// candidates, which leave out 0. An unregularised fit on a fine grid is ill-conditioned, and
 /// its held-out error follows round-off: cross-validation chose between it and a smoothed fit
 /// on the last digits, so the same record in other units, or shifted by 1e-9 of itself, got
-/// another baseline and, once, another cause (docs/diagnose.md, sessions 24 and 25).
+/// another baseline and, once, another cause (docs/diagnose-log.md, sessions 24 and 25).
 /// The reversible term is taken where cross-validation takes it by the one-standard-error rule
 /// (`kChosen`): a response partly linear in the input leaves the operator alone a structured
-/// error that diagnose called `unexplained` on clean records (docs/diagnose.md, sessions 35-37).
+/// error that diagnose called `unexplained` on clean records (docs/diagnose-log.md, sessions
+/// 35-37).
 inline PreisachFitOptions diagnose_baseline_options() {
   PreisachFitOptions o;
   o.candidate_smoothness = {1e-6, 1e-5, 1e-4, 1e-3};
