@@ -186,6 +186,9 @@ int run_diagnose(const std::vector<std::string>& args) {
                           {"heldout_rms_after", f.heldout_rms_after},
                           {"gain_pct", f.gain_pct}});
     }
+    nlohmann::json limits = nlohmann::json::array();
+    for (const ProtocolLimit& l : d.protocol_limits)
+      limits.push_back({{"effect", l.effect}, {"note", l.note}});
     print_json({{"input", in.column},
                 {"baseline",
                  {{"model", d.baseline_model},
@@ -200,7 +203,8 @@ int run_diagnose(const std::vector<std::string>& args) {
                 {"noise_floor_pct_range", d.noise_floor_pct_range},
                 {"findings", findings},
                 {"cause", d.cause},
-                {"cause_note", d.cause_note}});
+                {"cause_note", d.cause_note},
+                {"protocol_limits", limits}});
     return kOk;
   }
   std::cout << fmt::format("{}: {} rows, input {}, response {}\n", m.source(), m.rows(), in.column,
@@ -224,6 +228,8 @@ int run_diagnose(const std::vector<std::string>& args) {
         "  extended model: {} (held-out E_RMS {:.3f} -> {:.3f} %, gain {:.1f} %)\n",
         f.extended_model, f.heldout_rms_before, f.heldout_rms_after, f.gain_pct);
   }
+  for (const ProtocolLimit& l : d.protocol_limits)
+    std::cout << fmt::format("  protocol hides {}: {}\n", l.effect, l.note);
   std::cout << "  cause: " << d.cause << (d.cause_note.empty() ? "" : " (" + d.cause_note + ")")
             << "\n";
   return kOk;

@@ -176,12 +176,19 @@ import json,sys; d=json.loads(sys.stdin.read())
 assert set(['input','baseline','findings','cause']) <= set(d), d.keys()
 assert set(['model','rms_pct_range','max_pct_range']) <= set(d['baseline'])
 for f in d['findings']:
-    assert set(['effect','detected','score','evidence','extended_model','heldout_rms_before','heldout_rms_after','gain_pct']) <= set(f), f" \
+    assert set(['effect','detected','score','evidence','extended_model','heldout_rms_before','heldout_rms_after','gain_pct']) <= set(f), f
+assert [l['effect'] for l in d['protocol_limits']] == ['lonely_stroke', 'creep'], d['protocol_limits']
+assert all(l['note'] for l in d['protocol_limits'])" \
     < <("$bin" diagnose "$work/drift.csv" --json 2>/dev/null)
 fi
 # Voltage tests at several loads: the augmented baseline, held out by load segment; clean data.
 check "diagnose voltage tests (clean) names none" 0 '"cause": "none"' -- "$bin" diagnose "$src/examples/data/voltage-8loads.csv" --json
-check "diagnose voltage tests: augmented baseline by load segment" 0 "held out by load segments" -- "$bin" diagnose "$src/examples/data/voltage-8loads.csv"
+"$bin" diagnose "$src/examples/data/voltage-8loads.csv" >"$work/v8.txt" 2>&1
+assert "diagnose voltage tests: human report exits 0" test $? -eq 0
+assert "diagnose voltage tests: augmented baseline by load segment" grep -q "held out by load segments" "$work/v8.txt"
+# Its loads rise through the file (30 to 100 g), one reading per hold, holds of one length.
+assert "diagnose says the load order hides a drift" grep -q "protocol hides drift: the loads were tested in the order of their size" "$work/v8.txt"
+assert "diagnose says one reading per equal hold hides creep" grep -q "protocol hides creep: with one reading per hold" "$work/v8.txt"
 # Paper 001's protocol (100 -> 50 g, lonely stroke 0.08 in the rig file): named.
 check "diagnose one load change names the lonely stroke" 0 '"cause": "lonely_stroke"' -- "$bin" diagnose "$src/examples/data/voltage-lonely.csv" --json
 # A file without a clock (time_s, the rig's first column, dropped): times from dwell_s.

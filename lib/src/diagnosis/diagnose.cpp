@@ -230,6 +230,7 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   }
   d.identified_rows = identified_rows.size();
   d.identified_sustained_rms_pct_range = sustained_rms_pct(ctx, identified_rows);
+  d.protocol_limits = protocol_limits_of(data);
 
   d.findings.push_back(detect_lonely_stroke(ctx));
   d.findings.push_back(detect_creep(ctx));

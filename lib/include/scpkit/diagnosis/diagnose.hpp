@@ -25,6 +25,8 @@
 // 4. cause: outliers when detected, else the detected effect with the largest held-out gain;
 //    "none" when nothing is detected and the held-out error is within twice the noise floor;
 //    "unexplained" otherwise.
+// 5. Protocol limits: the effects the record's protocol keeps from view (protocol_limits_of),
+//    listed beside the cause with the change that would show them.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -50,6 +52,12 @@ struct Finding {
   std::vector<double> heldout_prediction;
 };
 
+/// An effect the record's protocol keeps from view, and the protocol change that would show it.
+struct ProtocolLimit {
+  std::string effect;
+  std::string note;  ///< one sentence: why this protocol hides it, and what to change
+};
+
 struct Diagnosis {
   std::string baseline_model = "preisach";
   std::string heldout_by;        ///< "cycles", "segments" or "load segments"
@@ -67,6 +75,8 @@ struct Diagnosis {
   std::vector<Finding> findings;
   std::string cause = "none";
   std::string cause_note;  ///< why `none` or `unexplained`, where it is not plain
+  /// What this protocol keeps from view (protocol_limits_of): read beside a `none`.
+  std::vector<ProtocolLimit> protocol_limits;
 };
 
 /// The baseline's identification options: those of `scpkit fit` but for the smoothness
@@ -120,6 +130,13 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& options = {}
 /// a file has no clock: a hold starts at the previous reading when the input (or the load)
 /// changes or the dwell does not grow, and each of its readings comes its dwell after that.
 std::vector<double> reading_times_from_dwell(const DiagnoseData& data);
+
+/// The effects this record's protocol keeps diagnose from seeing, each measured as a miss
+/// (docs/diagnose.md): on a load test the lonely stroke (a virgin specimen's first loading
+/// looks the same); with one reading per hold and holds of one length, creep (its lag is loop
+/// width to the baseline); loads tested in the order of their size, drift (f1 absorbs it).
+/// Read off the protocol alone, so a planned test can be checked before it is run.
+std::vector<ProtocolLimit> protocol_limits_of(const DiagnoseData& data);
 
 /// The effect names of SPEC.md, in the order diagnose reports them.
 const std::vector<std::string>& effect_names();

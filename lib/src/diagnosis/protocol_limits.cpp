@@ -1,0 +1,85 @@
+// What a record's protocol keeps diagnose from seeing (docs/diagnose.md, "What it gets wrong"):
+// each limit below was measured as a miss on rig and independent-generator data, and each is
+// read off the protocol alone, so a test can be checked before it is run.
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include "scpkit/diagnosis/diagnose.hpp"
+#include "scpkit/identification/augmented_fit.hpp"
+
+namespace scpkit {
+namespace {
+
+// Whether the segments' loads, in the order tested, rise or fall throughout (three or more).
+bool loads_in_order_of_size(const std::vector<double>& seg_load) {
+  if (seg_load.size() < 3) return false;
+  const bool rising = std::is_sorted(seg_load.begin(), seg_load.end(), std::less_equal<>());
+  const bool falling = std::is_sorted(seg_load.begin(), seg_load.end(), std::greater_equal<>());
+  return rising || falling;
+}
+
+}  // namespace
+
+std::vector<ProtocolLimit> protocol_limits_of(const DiagnoseData& data) {
+  const std::size_t n = data.input.size();
+  std::vector<ProtocolLimit> out;
+  if (n < 2) return out;
+  std::vector<int> seg(n, 0);
+  std::vector<double> seg_load;
+  const std::set<double> loads(data.load_N.begin(), data.load_N.end());
+  if (!data.input_is_load && data.load_N.size() == n && loads.size() >= 2) {
+    for (const LoadSegment& s : split_load_segments(data.load_N, data.segments)) {
+      for (std::size_t t = s.first; t < s.first + s.count; ++t)
+        seg[t] = static_cast<int>(seg_load.size());
+      seg_load.push_back(s.load);
+    }
+  }
+
+  if (data.input_is_load) {
+    out.push_back({"lonely_stroke",
+                   "on a load test a first stroke that differs from the later cycles is also a "
+                   "virgin specimen's first loading, so it is reported, never named; a test on "
+                   "the drive at two or more loads shows it, since it comes back after every "
+                   "load change"});
+  }
+
+  // Creep with one reading per hold shows only where the holds differ in length: at one
+  // length (or one rate along ramps) the lag behind each step is the same function of the
+  // memory path in every cycle, loop width to a rate-independent model.
+  std::vector<double> time = data.time_s;
+  if (time.empty() && !data.dwell_s.empty()) time = reading_times_from_dwell(data);
+  if (time.size() == n) {
+    const auto [umin, umax] = std::minmax_element(data.input.begin(), data.input.end());
+    const double utol = 1e-9 * std::max(*umax - *umin, 1e-300);
+    bool read_during_holds = false;
+    double shortest = HUGE_VAL, longest = 0.0;
+    for (std::size_t t = 1; t < n; ++t) {
+      if (seg[t] != seg[t - 1]) continue;
+      if (std::abs(data.input[t] - data.input[t - 1]) <= utol) {
+        read_during_holds = true;
+      } else if (const double dt = time[t] - time[t - 1]; dt > 0.0) {
+        shortest = std::min(shortest, dt);
+        longest = std::max(longest, dt);
+      }
+    }
+    if (!read_during_holds && !(longest > 1.05 * shortest)) {
+      out.push_back({"creep",
+                     "with one reading per hold and every hold as long (or readings at one "
+                     "rate along ramps), a lag behind each input step looks like loop width, "
+                     "which the rate-independent baseline absorbs; vary the hold times or log "
+                     "readings during the holds"});
+    }
+  }
+
+  if (loads_in_order_of_size(seg_load)) {
+    out.push_back({"drift",
+                   "the loads were tested in the order of their size, so a drift over the "
+                   "record moves each load's offset as a function of the load, which f1 "
+                   "absorbs, and only the drift inside each segment shows; test the loads in "
+                   "a shuffled order"});
+  }
+  return out;
+}
+
+}  // namespace scpkit

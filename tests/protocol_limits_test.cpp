@@ -1,0 +1,102 @@
+// protocol_limits_of: the effects a record's protocol keeps diagnose from seeing. Over rig
+// records of many protocols the limits must be exactly those the rig's own description
+// implies (one reading per hold at one hold length: creep; loads in the order of their size:
+// drift; a load test: the lonely stroke), read off the data alone.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "diagnose_scenarios.hpp"
+#include "scpkit/diagnosis/diagnose.hpp"
+
+namespace scpkit {
+namespace {
+
+std::vector<std::string> effects_of(const std::vector<ProtocolLimit>& limits) {
+  std::vector<std::string> out;
+  for (const ProtocolLimit& l : limits) {
+    EXPECT_FALSE(l.note.empty()) << l.effect;
+    out.push_back(l.effect);
+  }
+  return out;
+}
+
+bool sorted_either_way(const std::vector<double>& g) {
+  return std::is_sorted(g.begin(), g.end()) || std::is_sorted(g.rbegin(), g.rend());
+}
+
+TEST(ProtocolLimits, FollowTheRigsProtocolOverManyScenarios) {
+  int creep_hidden = 0, creep_shown = 0, drift_hidden = 0, drift_shown = 0;
+  for (const std::string side : {"load", "voltage"}) {
+    for (int i = 0; i < 24; ++i) {
+      const testing::Scenario s = testing::make_scenario(side, "none", i);
+      const std::vector<std::string> got =
+          effects_of(protocol_limits_of(testing::scenario_data(s)));
+      std::vector<std::string> want;
+      if (side == "load") want.push_back("lonely_stroke");
+      const int per_hold =
+          side == "load" ? s.spec.protocol.readings_per_hold : s.spec.voltage.readings_per_hold;
+      const double spread =
+          side == "load" ? s.spec.protocol.dwell_spread : s.spec.voltage.dwell_spread;
+      const bool creep = per_hold == 1 && spread == 0.0;
+      if (creep) want.push_back("creep");
+      (creep ? creep_hidden : creep_shown) += 1;
+      if (side == "voltage") {
+        const bool drift = sorted_either_way(s.spec.voltage.loads_g);
+        if (drift) want.push_back("drift");
+        (drift ? drift_hidden : drift_shown) += 1;
+      }
+      EXPECT_EQ(got, want) << side << " scenario " << i;
+    }
+  }
+  // The sample holds both sides of each rule.
+  EXPECT_GT(creep_hidden, 0);
+  EXPECT_GT(creep_shown, 0);
+  EXPECT_GT(drift_hidden, 0);
+  EXPECT_GT(drift_shown, 0);
+}
+
+// Hand-built records: falling loads hide a drift as rising ones do; two loads are no order; a
+// record without a clock says nothing of creep (diagnose does not test creep there and says so).
+TEST(ProtocolLimits, LoadOrderClockAndHolds) {
+  auto voltage_test = [](const std::vector<double>& loads_N) {
+    DiagnoseData d;
+    d.input_is_load = false;
+    for (double F : loads_N) {
+      for (int k = 0; k < 12; ++k) {
+        d.input.push_back(k < 6 ? k : 12 - k);
+        d.output.push_back(0.0);
+        d.load_N.push_back(F);
+        d.time_s.push_back(static_cast<double>(d.time_s.size()) * 30.0);
+      }
+    }
+    return d;
+  };
+  EXPECT_EQ(effects_of(protocol_limits_of(voltage_test({0.3, 0.5, 0.7, 0.9}))),
+            (std::vector<std::string>{"creep", "drift"}));
+  EXPECT_EQ(effects_of(protocol_limits_of(voltage_test({0.9, 0.7, 0.5, 0.3}))),
+            (std::vector<std::string>{"creep", "drift"}));
+  EXPECT_EQ(effects_of(protocol_limits_of(voltage_test({0.5, 0.9, 0.3, 0.7}))),
+            (std::vector<std::string>{"creep"}));
+  EXPECT_EQ(effects_of(protocol_limits_of(voltage_test({0.3, 0.9, 0.3}))),
+            (std::vector<std::string>{"creep"}));
+
+  DiagnoseData varied = voltage_test({0.5, 0.9, 0.3, 0.7});
+  for (std::size_t t = 1; t < varied.time_s.size(); ++t)
+    varied.time_s[t] = varied.time_s[t - 1] + (t % 3 == 0 ? 60.0 : 30.0);
+  EXPECT_TRUE(protocol_limits_of(varied).empty());
+
+  DiagnoseData held = voltage_test({0.5, 0.9, 0.3, 0.7});
+  held.input[5] = held.input[4];  // two readings in one hold
+  EXPECT_TRUE(protocol_limits_of(held).empty());
+
+  DiagnoseData unclocked = voltage_test({0.3, 0.5, 0.7, 0.9});
+  unclocked.time_s.clear();
+  EXPECT_EQ(effects_of(protocol_limits_of(unclocked)), (std::vector<std::string>{"drift"}));
+}
+
+}  // namespace
+}  // namespace scpkit
