@@ -3,6 +3,7 @@
 // read off the protocol alone, so a test can be checked before it is run.
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <set>
 
 #include "scpkit/diagnosis/diagnose.hpp"
@@ -11,11 +12,13 @@
 namespace scpkit {
 namespace {
 
-// Whether the segments' loads, in the order tested, rise or fall throughout (three or more).
+// Whether the segments' loads, in the order tested, strictly rise or strictly fall throughout
+// (three or more). adjacent_find, since is_sorted needs a strict order and allows ties.
 bool loads_in_order_of_size(const std::vector<double>& seg_load) {
   if (seg_load.size() < 3) return false;
-  const bool rising = std::is_sorted(seg_load.begin(), seg_load.end(), std::less_equal<>());
-  const bool falling = std::is_sorted(seg_load.begin(), seg_load.end(), std::greater_equal<>());
+  const auto end = seg_load.end();
+  const bool rising = std::adjacent_find(seg_load.begin(), end, std::greater_equal<>()) == end;
+  const bool falling = std::adjacent_find(seg_load.begin(), end, std::less_equal<>()) == end;
   return rising || falling;
 }
 
