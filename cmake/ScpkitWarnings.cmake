@@ -7,4 +7,6 @@ if(SCPKIT_SANITIZE)
   target_compile_options(scpkit_warnings INTERFACE
     -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer)
   target_link_options(scpkit_warnings INTERFACE -fsanitize=address,undefined)
+  # Tests that only measure behaviour over many records skip themselves here (tests/README.md).
+  target_compile_definitions(scpkit_warnings INTERFACE SCPKIT_SANITIZED=1)
 endif()
