@@ -22,12 +22,9 @@
     }                                                                                 \
   } while (0)
 
-// A test that runs diagnose (or a fit) over many records measures behaviour: how often a
-// hidden effect is named. The sanitizers make that code about 11 times slower, and the suite of
-// such tests (about 1600 s plain) would take CI past its 90 minutes, so under the sanitizers
-// these tests skip themselves and run in the optimised build, the README's test command. The
-// sanitizers still run every detector: the remaining diagnose tests, the CLI test and every
-// other test run diagnose on load and voltage records (tests/README.md).
+// The first line of a test that measures behaviour over many records (how often a hidden effect
+// is named): it runs in the optimised build and skips itself under the sanitizers, where it
+// would take CI past its 90 minutes. Why, and what still runs there: tests/README.md.
 #ifdef SCPKIT_SANITIZED
 #define SCPKIT_SKIP_UNDER_SANITIZERS() \
   GTEST_SKIP() << "behaviour over many records: run in the optimised build"
