@@ -13,7 +13,8 @@ namespace scpkit::cli {
 namespace {
 
 constexpr const char* kUsage =
-    "scpkit diagnose DATA.csv [--json] [--seed N] [--coil-d MM --coil-D MM --coil-n N --legs K]";
+    "scpkit diagnose DATA.csv [--json] [--seed N] [--threads N] [--coil-d MM --coil-D MM "
+    "--coil-n N --legs K]";
 constexpr const char* kAbout =
     "Fits the baseline (a Preisach model) with held-out validation over whole cycles or the\n"
     "segment column, estimates the noise floor from the data, tests one signature per named\n"
@@ -27,7 +28,7 @@ constexpr const char* kAbout =
     "ply-mapping diagnosis instead: the SCP gain predicted from the material card and the coil\n"
     "(metadata coil_d_mm, coil_D_mm, coil_n, legs, or the flags) against the measured one, and\n"
     "the causes spring_index, legs, active_coils, input_scale scored on held-out cycles.\n"
-    "--json prints the SPEC's object.";
+    "--json prints the SPEC's object. --threads only changes the time the diagnosis takes.";
 
 // The ply-mapping diagnosis of a paired thread/SCP test.
 int run_ply_mapping(const Measurement& m, const po::variables_map& vm) {
@@ -142,6 +143,7 @@ int run_diagnose(const std::vector<std::string>& args) {
       "coil-n", po::value<double>(), "ply mapping: SCP coils n (whole actuator)")(
       "legs", po::value<int>(), "ply mapping: SCP legs (1, or 2 double-backed)")(
       "material", po::value<std::string>(), "ply mapping: material card id");
+  add_threads_option(opt, "threads for the baseline's shifted grids (same result for any count)");
   po::variables_map vm;
   if (!parse_command_line(args, kUsage, kAbout, opt, {"DATA"}, vm)) return kOk;
   const Measurement m = Measurement::read(vm["DATA"].as<std::string>());
@@ -165,6 +167,7 @@ int run_diagnose(const std::vector<std::string>& args) {
   if (drive) data.load_N = held_load_N(m);
   DiagnoseOptions o;
   o.seed = static_cast<std::uint64_t>(std::max(0LL, vm["seed"].as<long long>()));
+  o.baseline.threads = threads_from(vm);
   const Diagnosis d = [&] {
     try {
       return diagnose(data, o);

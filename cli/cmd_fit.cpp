@@ -60,6 +60,7 @@ int run_fit(const std::vector<std::string>& args) {
       "grid-shifts", po::value<int>()->default_value(4),
       "average of S grids shifted by h/S (1 = one grid, the papers' recipe)")(
       "json", "print one JSON object instead of the report");
+  add_threads_option(opt, "Preisach: threads over the shifted grids (same model for any count)");
   po::variables_map vm;
   if (!parse_command_line(args, kUsage, kAbout, opt, {"DATA"}, vm)) return kOk;
 
@@ -88,6 +89,7 @@ int run_fit(const std::vector<std::string>& args) {
   fo.smoothness = vm["smoothness"].as<double>();
   fo.folds = vm["folds"].as<int>();
   fo.grid_shifts = vm["grid-shifts"].as<int>();
+  fo.threads = threads_from(vm);
   const std::string sign = vm["sign"].as<std::string>();
   if (sign == "auto") {
     fo.sign = 0;

@@ -5,7 +5,6 @@
 #include <cstdlib>
 #include <iostream>
 #include <mutex>
-#include <thread>
 
 #include "commands.hpp"
 #include "common.hpp"
@@ -42,16 +41,13 @@ int run_sweep(const std::vector<std::string>& args) {
   po::options_description opt("options");
   opt.add_options()("help,h", "show this help")("output,o", po::value<std::string>(),
                                                 "CSV to write (required)")(
-      "threads",
-      po::value<int>()->default_value(
-          static_cast<int>(std::max(1u, std::thread::hardware_concurrency()))),
-      "worker threads")("shard", po::value<std::string>(), "evaluate shard i of N (i/N)")(
+      "shard", po::value<std::string>(), "evaluate shard i of N (i/N)")(
       "json", "print a JSON summary on stdout");
+  add_threads_option(opt, "worker threads");
   po::variables_map vm;
   if (!parse_command_line(args, kUsage, kAbout, opt, {"SWEEP"}, vm)) return kOk;
   if (!vm.count("output")) throw UsageError("-o OUT.csv is required");
-  const int threads = vm["threads"].as<int>();
-  if (threads < 1 || threads > 1024) throw UsageError("--threads must be 1..1024");
+  const int threads = threads_from(vm);
   int shard = 0, shards = 1;
   if (vm.count("shard")) {
     std::tie(shard, shards) = parse_shard(vm["shard"].as<std::string>());

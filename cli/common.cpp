@@ -2,7 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <iostream>
+#include <thread>
 #include <vector>
 
 namespace scpkit::cli {
@@ -33,6 +35,19 @@ bool parse_command_line(const std::vector<std::string>& args, const char* usage,
     if (!vm.count(name)) throw UsageError(fmt::format("missing {} (usage: {})", name, usage));
   }
   return true;
+}
+
+void add_threads_option(po::options_description& options, const char* what) {
+  options.add_options()("threads",
+                        po::value<int>()->default_value(
+                            static_cast<int>(std::max(1u, std::thread::hardware_concurrency()))),
+                        what);
+}
+
+int threads_from(const po::variables_map& vm) {
+  const int threads = vm["threads"].as<int>();
+  if (threads < 1 || threads > 1024) throw UsageError("--threads must be 1..1024");
+  return threads;
 }
 
 nlohmann::json metrics_json(const ErrorMetrics& m) {

@@ -42,6 +42,11 @@ bool parse_command_line(const std::vector<std::string>& args, const char* usage,
                         const char* description, po::options_description& visible,
                         const std::vector<std::string>& positional_names, po::variables_map& vm);
 
+/// `--threads N` (default: the machine's hardware threads), for commands whose result is the
+/// same for any count; threads_from reads it back, UsageError outside 1..1024.
+void add_threads_option(po::options_description& options, const char* what);
+int threads_from(const po::variables_map& vm);
+
 /// Metrics as JSON fields (rms_pct_range, max_pct_range, mean_abs, sd_abs, range, count).
 nlohmann::json metrics_json(const ErrorMetrics& m);
 

@@ -169,7 +169,15 @@ check "rig voltage shape errors are located" 3 "bad-vshape.toml:3:9: 'shape' mus
 # diagnose: SPEC's JSON keys; drift hidden in rig data is named.
 printf 'specimen = "thread"\nseed = 11\n[effects]\ndrift = 0.05\n' >"$work/drift.toml"
 "$bin" simulate "$work/drift.toml" -o "$work/drift.csv" >/dev/null
-check "diagnose names a hidden drift" 0 '"cause": "drift"' -- "$bin" diagnose "$work/drift.csv" --json
+# One thread and three: the same bytes (the baseline's shifted grids run on worker threads).
+"$bin" diagnose "$work/drift.csv" --json --threads 1 >"$work/drift-1.json" 2>/dev/null
+assert "diagnose --threads 1 exits 0" test $? -eq 0
+"$bin" diagnose "$work/drift.csv" --json --threads 3 >"$work/drift-3.json" 2>/dev/null
+assert "diagnose --threads 3 exits 0" test $? -eq 0
+check "diagnose names a hidden drift" 0 '"cause": "drift"' -- cat "$work/drift-1.json"
+assert "diagnose: the same JSON for any --threads" cmp -s "$work/drift-1.json" "$work/drift-3.json"
+check "diagnose --threads 0 is a usage error" 2 "--threads must be 1..1024" -- "$bin" diagnose "$work/drift.csv" --threads 0
+check "fit --threads 0 is a usage error" 2 "--threads must be 1..1024" -- "$bin" fit "$ex/pair-2ply.csv" --threads 0
 if command -v python3 >/dev/null; then
   assert "diagnose JSON follows SPEC" python3 -c "
 import json,sys; d=json.loads(sys.stdin.read())
@@ -179,7 +187,7 @@ for f in d['findings']:
     assert set(['effect','detected','score','evidence','extended_model','heldout_rms_before','heldout_rms_after','gain_pct']) <= set(f), f
 assert [l['effect'] for l in d['protocol_limits']] == ['lonely_stroke', 'creep'], d['protocol_limits']
 assert all(l['note'] for l in d['protocol_limits'])" \
-    < <("$bin" diagnose "$work/drift.csv" --json 2>/dev/null)
+    <"$work/drift-3.json"
 fi
 # Voltage tests at several loads: the augmented baseline, held out by load segment; clean data.
 check "diagnose voltage tests (clean) names none" 0 '"cause": "none"' -- "$bin" diagnose "$src/examples/data/voltage-8loads.csv" --json

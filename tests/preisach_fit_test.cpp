@@ -268,6 +268,86 @@ TEST(PreisachFit, ReportsUnexcitedCellsAndRefusesUnidentifiableData) {
   EXPECT_NE(why.find("folds"), std::string::npos);
 }
 
+// The shifted grids are fitted on worker threads and combined in grid order, so the thread
+// count changes nothing, bit for bit: the chosen setting, every cross-validation error, the
+// weights, the bias and the reversible term, over sampled records and settings (cross-validated
+// with the reversible term chosen; several loads restarted at blocks with rows left out; a
+// creep-like output filter; three threads for four grids and for five).
+TEST(PreisachFit, TheThreadCountDoesNotChangeTheFit) {
+  std::mt19937 rng(37);
+  for (int trial = 0; trial < 6; ++trial) {
+    const PreisachGrid grid{0.0, 1.0, 10};
+    const PreisachModel truth = testing::random_model(rng, grid);
+    const auto u = rich_input(rng, 0.0, 1.0, 18, 6);
+    PreisachState s = PreisachState::negative_saturation(grid);
+    Eigen::VectorXd y = truth.simulate(s, u);
+    std::normal_distribution<double> noise(0.0, 0.01 * truth.total_mass());
+    for (Eigen::Index t = 0; t < y.size(); ++t)
+      y[t] += 0.3 * truth.total_mass() * u[t] + noise(rng);
+    PreisachFitOptions opt;
+    opt.candidate_levels = {6, 8, 12};
+    opt.grid_shifts = trial % 2 == 0 ? 4 : 5;
+    opt.reversible = PreisachFitOptions::Reversible::kChosen;
+    std::vector<int> blocks;
+    if (trial % 3 == 1) {  // three segments, each restarted; every seventh row left out
+      for (std::size_t t = 0; t < u.size(); ++t)
+        blocks.push_back(static_cast<int>(3 * t / u.size()));
+      opt.restart_at_blocks = true;
+      opt.exclude.assign(u.size(), 0);
+      for (std::size_t t = 0; t < u.size(); t += 7) opt.exclude[t] = 1;
+    }
+    if (trial % 3 == 2) {
+      opt.output_filter = [](Eigen::Ref<Eigen::VectorXd> p) {
+        double v = p.size() ? p[0] : 0.0;
+        for (Eigen::Index t = 0; t < p.size(); ++t) {
+          v = p[t] + (v - p[t]) * 0.6;
+          p[t] = 0.8 * p[t] + 0.2 * v;
+        }
+      };
+    }
+    const std::span<const double> ys(y.data(), y.size());
+    opt.threads = 1;
+    const PreisachFit one = fit_preisach(u, ys, blocks, opt);
+    opt.threads = 3;
+    const PreisachFit three = fit_preisach(u, ys, blocks, opt);
+    EXPECT_EQ(one.summary.levels, three.summary.levels) << "trial " << trial;
+    EXPECT_EQ(one.summary.smoothness, three.summary.smoothness) << "trial " << trial;
+    EXPECT_EQ(one.summary.reversible, three.summary.reversible) << "trial " << trial;
+    ASSERT_EQ(one.summary.cross_validation.size(), three.summary.cross_validation.size());
+    ASSERT_FALSE(one.summary.cross_validation.empty());
+    for (std::size_t i = 0; i < one.summary.cross_validation.size(); ++i) {
+      EXPECT_EQ(one.summary.cross_validation[i].rms_pct_range,
+                three.summary.cross_validation[i].rms_pct_range)
+          << "trial " << trial << ", setting " << i;
+    }
+    ASSERT_EQ(one.model.weights().size(), three.model.weights().size());
+    EXPECT_TRUE(one.model.weights() == three.model.weights()) << "trial " << trial;
+    EXPECT_EQ(one.model.bias(), three.model.bias()) << "trial " << trial;
+    EXPECT_EQ(one.reversible, three.reversible) << "trial " << trial;
+    EXPECT_EQ(one.summary.train.rms_pct_range, three.summary.train.rms_pct_range);
+  }
+}
+
+// An exception thrown on a worker thread (here by the output filter) reaches the caller.
+TEST(PreisachFit, AnErrorOnAWorkerThreadReachesTheCaller) {
+  std::mt19937 rng(38);
+  const auto u = rich_input(rng, 0.0, 1.0, 12, 5);
+  std::vector<double> y(u.size());
+  for (std::size_t t = 0; t < u.size(); ++t) y[t] = u[t] * u[t];
+  PreisachFitOptions opt;
+  opt.levels = 6;
+  opt.smoothness = 0.0;
+  opt.threads = 4;
+  opt.output_filter = [](Eigen::Ref<Eigen::VectorXd>) {
+    throw IdentificationError("filter failed");
+  };
+  EXPECT_THROW_MSG(fit_preisach(u, y, {}, opt), IdentificationError, "filter failed");
+  opt.threads = 0;
+  std::string why;
+  EXPECT_FALSE(opt.IsValid(&why));
+  EXPECT_NE(why.find("threads"), std::string::npos);
+}
+
 TEST(PreisachFit, CycleBlocksAreContiguousWholeCycles) {
   std::vector<double> u;
   for (int c = 0; c < 10; ++c) {

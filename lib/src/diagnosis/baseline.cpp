@@ -231,6 +231,7 @@ Baseline::Baseline(const Record& rec, const PreisachFitOptions& initial) : rec_(
   options_.reversible = full.summary.reversible ? PreisachFitOptions::Reversible::kOn
                                                 : PreisachFitOptions::Reversible::kOff;
   options_.nnls = initial.nnls;
+  options_.threads = initial.threads;
 }
 
 std::string Baseline::name() const {

@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "scpkit/error.hpp"
+#include "util/parallel.hpp"
 
 namespace scpkit {
 namespace {
@@ -204,31 +205,50 @@ struct HeldoutErrors {
 
 HeldoutErrors heldout_errors(const std::vector<Design>& shifts, const std::vector<double>& lambdas,
                              const std::vector<int>& block_of, const std::vector<char>& eligible,
-                             std::span<const double> output, double range,
-                             const NnlsOptions& nnls) {
+                             std::span<const double> output, double range, const NnlsOptions& nnls,
+                             int threads) {
+  // The held-out blocks and their rows, in one order for every design.
+  std::vector<int> held;
+  std::vector<std::vector<Eigen::Index>> rows_of;
+  for (std::size_t b = 0; b < shifts.front().gram.size(); ++b) {
+    if (shifts.front().rows[b] == 0 || !eligible[b]) continue;
+    held.push_back(static_cast<int>(b));
+    rows_of.emplace_back();
+    for (Eigen::Index t = 0; t < shifts.front().A.rows(); ++t) {
+      if (block_of[t] == static_cast<int>(b)) rows_of.back().push_back(t);
+    }
+  }
+  // Each grid's share of the averaged prediction, [grid][held-out block][lambda][row]: the
+  // grids are independent (each warm-starts its solves from its own previous lambda).
+  const double S = static_cast<double>(shifts.size());
+  std::vector<std::vector<std::vector<Eigen::VectorXd>>> share(shifts.size());
+  detail::parallel_for(static_cast<int>(shifts.size()), threads, [&](int k) {
+    const Design& d = shifts[static_cast<std::size_t>(k)];
+    auto& mine = share[static_cast<std::size_t>(k)];
+    mine.resize(held.size());
+    for (std::size_t h = 0; h < held.size(); ++h) {
+      const std::vector<Eigen::Index>& rows = rows_of[h];
+      Eigen::VectorXd warm;
+      for (double lambda : lambdas) {
+        const NnlsResult r = solve_design(d, lambda, held[h], nnls, warm);
+        warm = r.x;
+        Eigen::VectorXd part(static_cast<Eigen::Index>(rows.size()));
+        for (std::size_t i = 0; i < rows.size(); ++i)
+          part[static_cast<Eigen::Index>(i)] = d.A.row(rows[i]).dot(r.x) / S;
+        mine[h].push_back(std::move(part));
+      }
+    }
+  });
   HeldoutErrors out;
   out.block_sse.assign(lambdas.size(), {});
   std::vector<double> sum_sq(lambdas.size(), 0.0);
   int count = 0;
-  const double S = static_cast<double>(shifts.size());
-  for (std::size_t b = 0; b < shifts.front().gram.size(); ++b) {
-    if (shifts.front().rows[b] == 0 || !eligible[b]) continue;
-    std::vector<Eigen::Index> rows;
-    for (Eigen::Index t = 0; t < shifts.front().A.rows(); ++t) {
-      if (block_of[t] == static_cast<int>(b)) rows.push_back(t);
-    }
+  for (std::size_t h = 0; h < held.size(); ++h) {
+    const std::vector<Eigen::Index>& rows = rows_of[h];
     count += static_cast<int>(rows.size());
-    std::vector<Eigen::VectorXd> warm(shifts.size());
     for (std::size_t l = 0; l < lambdas.size(); ++l) {
       Eigen::VectorXd pred = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(rows.size()));
-      for (std::size_t k = 0; k < shifts.size(); ++k) {
-        const NnlsResult r =
-            solve_design(shifts[k], lambdas[l], static_cast<int>(b), nnls, warm[k]);
-        warm[k] = r.x;
-        for (std::size_t i = 0; i < rows.size(); ++i) {
-          pred[static_cast<Eigen::Index>(i)] += shifts[k].A.row(rows[i]).dot(r.x) / S;
-        }
-      }
+      for (std::size_t k = 0; k < shifts.size(); ++k) pred += share[k][h][l];
       double sse = 0.0;
       for (std::size_t i = 0; i < rows.size(); ++i) {
         const double e = pred[static_cast<Eigen::Index>(i)] - output[rows[i]];
@@ -286,6 +306,8 @@ bool PreisachFitOptions::IsValid(std::string* why) const {
   if (lo && hi && !(*lo < *hi)) return fail("lo must be below hi");
   if (folds < 2) return fail("cross-validation needs at least 2 folds");
   if (grid_shifts < 1 || grid_shifts > 16) return fail("grid_shifts must be 1..16");
+  if (threads < 1 || threads > 1024)
+    return fail(fmt::format("threads must be 1..1024, got {}", threads));
   return true;
 }
 
@@ -403,12 +425,12 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
   auto designs_for = [&](int L, bool with_rank, bool with_reversible) {
     std::optional<std::pair<double, double>> reversible;
     if (with_reversible) reversible = std::pair{base.lo, base.hi};
-    std::vector<Design> shifts;
-    for (int k = 0; k < S; ++k) {
-      shifts.push_back(make_design(shifted_grid(base, L, k, S), sign, input, output, block_of,
-                                   nblocks, with_rank && k == 0, restart, segment_of,
-                                   options.output_filter, cycle, reversible));
-    }
+    std::vector<Design> shifts(static_cast<std::size_t>(S));
+    detail::parallel_for(S, options.threads, [&](int k) {
+      shifts[static_cast<std::size_t>(k)] = make_design(
+          shifted_grid(base, L, k, S), sign, input, output, block_of, nblocks, with_rank && k == 0,
+          restart, segment_of, options.output_filter, cycle, reversible);
+    });
     return shifts;
   };
   std::sort(lambdas.begin(), lambdas.end());
@@ -433,8 +455,9 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
           if (!too_big(L, lam, rev)) lams.push_back(lam);
         }
         if (lams.empty()) continue;
-        const HeldoutErrors cv = heldout_errors(designs_for(L, false, rev), lams, block_of,
-                                                eligible, output, range, options.nnls);
+        const HeldoutErrors cv =
+            heldout_errors(designs_for(L, false, rev), lams, block_of, eligible, output, range,
+                           options.nnls, options.threads);
         for (std::size_t l = 0; l < lams.size(); ++l) {
           summary.cross_validation.push_back({L, lams[l], rev, cv.rms_pct[l]});
           if (cv.rms_pct[l] < best.rms) best = {cv.rms_pct[l], L, lams[l], cv.block_sse[l]};
@@ -459,8 +482,14 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
   bool converged = true;
   std::string message;
   double reversible_coef = 0.0;
-  for (const Design& d : shifts) {
-    const NnlsResult r = solve_design(d, chosen_lambda, -1, options.nnls);
+  std::vector<NnlsResult> solved(shifts.size());
+  detail::parallel_for(S, options.threads, [&](int k) {
+    solved[static_cast<std::size_t>(k)] =
+        solve_design(shifts[static_cast<std::size_t>(k)], chosen_lambda, -1, options.nnls);
+  });
+  for (std::size_t k = 0; k < shifts.size(); ++k) {
+    const Design& d = shifts[k];
+    const NnlsResult& r = solved[k];
     const int p = d.grid.cells();
     models.emplace_back(d.grid, r.x.head(p) * static_cast<double>(sign), r.x[p]);
     if (chosen_reversible) reversible_coef += sign * r.x[p + 1] / static_cast<double>(S);

@@ -65,6 +65,10 @@ struct PreisachFitOptions {
   enum class Reversible { kOff, kOn, kChosen };
   Reversible reversible = Reversible::kOff;
   NnlsOptions nnls;
+  /// Threads over the S shifted grids (each grid's design and solves are independent). The fit
+  /// is identical for any count: every grid's result is combined in grid order. With more than
+  /// one, output_filter is called from several threads at once and must not modify shared state.
+  int threads = 1;
 
   /// False (with the reason) for impossible settings.
   bool IsValid(std::string* why) const;
