@@ -9,6 +9,7 @@
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "scpkit/memory.hpp"
 #include "scpkit/version.hpp"
 
 namespace {
@@ -49,6 +50,7 @@ void print_help() {
 
 int main(int argc, char** argv) {
   using namespace scpkit::cli;
+  scpkit::keep_large_blocks_in_the_heap();
   std::vector<std::string> args(argv + 1, argv + argc);
   if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
     print_help();

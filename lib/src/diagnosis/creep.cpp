@@ -7,6 +7,7 @@
 
 #include "detectors.hpp"
 #include "stats.hpp"
+#include "util/parallel.hpp"
 
 namespace scpkit::diagnosis {
 
@@ -199,17 +200,26 @@ Finding kelvin_creep(Context& ctx) {
       [&](int k) {
         const std::vector<char> train = ctx.train_mask(k);
         std::vector<double> best_p = ctx.by_fold[static_cast<std::size_t>(k)].pred;
+        // Each candidate's training error (chosen on one grid, then refitted), on worker threads.
+        std::vector<double> ss(candidates.size(), 0.0);
+        detail::parallel_for(
+            static_cast<int>(candidates.size()), ctx.base.options().threads, [&](int i) {
+              const std::vector<double> p =
+                  ctx.base
+                      .fit(train,
+                           {filter_for(candidates[static_cast<std::size_t>(i)]), nullptr, true})
+                      .pred;
+              double& sum = ss[static_cast<std::size_t>(i)];
+              for (std::size_t t = 0; t < rec.size(); ++t) {
+                if (train[t]) sum += (rec.y[t] - p[t]) * (rec.y[t] - p[t]);
+              }
+            });
         double best = std::numeric_limits<double>::infinity();
         Kelvin best_k{0.0, 0.0};
-        for (const Kelvin& kv : candidates) {  // chosen on one grid, then refitted
-          const std::vector<double> p = ctx.base.fit(train, {filter_for(kv), nullptr, true}).pred;
-          double ss = 0.0;
-          for (std::size_t t = 0; t < rec.size(); ++t) {
-            if (train[t]) ss += (rec.y[t] - p[t]) * (rec.y[t] - p[t]);
-          }
-          if (ss < best) {
-            best = ss;
-            best_k = kv;
+        for (std::size_t i = 0; i < candidates.size(); ++i) {
+          if (ss[i] < best) {
+            best = ss[i];
+            best_k = candidates[i];
           }
         }
         if (best_k.c > 0.0) ++creeping_folds;
@@ -314,16 +324,21 @@ Finding detect_creep_across_loads(Context& ctx) {
       [&](int k) {
         const std::vector<char> train = ctx.train_mask(k);
         const std::vector<double>& base = ctx.by_fold[static_cast<std::size_t>(k)].pred;
+        std::vector<double> ss(candidates.size());  // chosen on one grid, then refitted
+        detail::parallel_for(
+            static_cast<int>(candidates.size()), ctx.base.options().threads, [&](int i) {
+              const Kelvin& kv = candidates[static_cast<std::size_t>(i)];
+              const std::vector<double> p = kv.c == 0.0
+                                                ? ctx.base.fit(train, {nullptr, nullptr, true}).pred
+                                                : predict(train, base, kv, true);
+              ss[static_cast<std::size_t>(i)] = training_sse(rec.y, p, train);
+            });
         double best = std::numeric_limits<double>::infinity();
         Kelvin best_k{0.0, step};
-        for (const Kelvin& kv : candidates) {  // chosen on one grid, then refitted
-          const std::vector<double> p = kv.c == 0.0
-                                            ? ctx.base.fit(train, {nullptr, nullptr, true}).pred
-                                            : predict(train, base, kv, true);
-          const double ss = training_sse(rec.y, p, train);
-          if (ss < best) {
-            best = ss;
-            best_k = kv;
+        for (std::size_t i = 0; i < candidates.size(); ++i) {
+          if (ss[i] < best) {
+            best = ss[i];
+            best_k = candidates[i];
           }
         }
         if (best_k.c > 0.0) ++creeping_folds;

@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "detectors.hpp"
+#include "util/parallel.hpp"
 
 namespace scpkit::diagnosis {
 namespace {
@@ -158,10 +159,13 @@ Finding detect_lonely_stroke(Context& ctx) {
               c.lambda == 0.0 ? base.pred : ctx.base.fit(train, {{}, &y, true}).pred;
           return training_sse(y, p, train);
         };
-        std::vector<double> ss;
+        std::vector<double> ss(candidates.size());
+        detail::parallel_for(
+            static_cast<int>(candidates.size()), ctx.base.options().threads, [&](int i) {
+              ss[static_cast<std::size_t>(i)] = sse(candidates[static_cast<std::size_t>(i)]);
+            });
         std::size_t i_best = 0;
         for (std::size_t i = 0; i < candidates.size(); ++i) {
-          ss.push_back(sse(candidates[i]));
           if (ss[i] < ss[i_best] * (1.0 - 1e-9)) i_best = i;
         }
         Term best_c = candidates[i_best];
