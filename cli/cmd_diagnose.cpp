@@ -143,7 +143,7 @@ int run_diagnose(const std::vector<std::string>& args) {
       "coil-n", po::value<double>(), "ply mapping: SCP coils n (whole actuator)")(
       "legs", po::value<int>(), "ply mapping: SCP legs (1, or 2 double-backed)")(
       "material", po::value<std::string>(), "ply mapping: material card id");
-  add_threads_option(opt, "threads for the baseline's shifted grids (same result for any count)");
+  add_threads_option(opt, "worker threads (the same diagnosis for any count)");
   po::variables_map vm;
   if (!parse_command_line(args, kUsage, kAbout, opt, {"DATA"}, vm)) return kOk;
   const Measurement m = Measurement::read(vm["DATA"].as<std::string>());
