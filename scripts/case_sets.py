@@ -1,6 +1,6 @@
-"""The file-set driver of the diagnose test-case generators (independent_cases.py,
-independent_cases_b.py): the positional arguments OUT_DIR N [FIRST [SIDE-EFFECT]], the effect
-vocabulary per side (SPEC.md), and one file SIDE-EFFECT-I.csv per effect, side and seed. The
+"""The file-set driver of the diagnose test-case generators (scripts/independent_cases*.py):
+the positional arguments OUT_DIR N [FIRST [SIDE-EFFECT]], the effect vocabulary per side
+(SPEC.md), one file SIDE-EFFECT-I.csv per effect, side and seed, and the CSV writer. The
 generators share this and nothing of their physics."""
 import os
 import sys
@@ -8,6 +8,17 @@ import sys
 KINDS = [("load", ["none", "drift", "outliers", "creep", "minor_loop_noncongruence"]),
          ("voltage", ["none", "drift", "outliers", "creep", "lonely_stroke", "load_shape_coupling",
                       "offset_nonlinearity"])]
+
+
+def write_csv(out, meta, cols, rows):
+    """One measurement file: `# key: value` lines from meta, the header cols, then rows (lists
+    of cells already formatted)."""
+    with open(out, "w") as f:
+        for k, v in meta:
+            f.write(f"# {k}: {v}\n")
+        f.write(",".join(cols) + "\n")
+        for r in rows:
+            f.write(",".join(r) + "\n")
 
 
 def write_sets(prog, doc, args, make, rng_for, magnitude, skip=lambda effect: False):

@@ -24,7 +24,7 @@ Where the other two hold each input on a grid and read it during or after the ho
   nonlinearity as a knee exp(-(F - F_lo) / w) in f1."""
 import math, random, sys
 
-from case_sets import write_sets
+from case_sets import write_csv, write_sets
 
 
 class Plays:
@@ -112,15 +112,6 @@ def sensor(rng, ys, span):
     return [y + (0.0 if NOISE_FREE else ei) for y, ei in zip(ys, e)], f"noise {sigma:.4f} ar {ar}"
 
 
-def write(out, meta, cols, rows):
-    with open(out, "w") as f:
-        for k, v in meta:
-            f.write(f"# {k}: {v}\n")
-        f.write(",".join(cols) + "\n")
-        for r in rows:
-            f.write(",".join(r) + "\n")
-
-
 def make_load(rng, effect, mag, out):
     top = rng.choice([200.0, 300.0, 500.0])
     kind = rng.choice(["random", "damped", "minor"]) if effect != "minor_loop_noncongruence" else "minor"
@@ -138,7 +129,7 @@ def make_load(rng, effect, mag, out):
     cols = ["time_s", "load_g", "strain_pct" if strain else "disp_mm"]
     rows = [[f"{ti:.1f}", f"{x * top:.2f}", f"{100 * y / length:.6f}" if strain else f"{y:.5f}"]
             for ti, x, y in zip(t, u, ys)]
-    write(out, [("specimen", "thread"), ("length_mm", "100"), ("genc", f"{effect} {mag} kind {kind} dt {dt} {how}")],
+    write_csv(out, [("specimen", "thread"), ("length_mm", "100"), ("genc", f"{effect} {mag} kind {kind} dt {dt} {how}")],
           cols, rows)
 
 
@@ -194,7 +185,7 @@ def make_voltage(rng, effect, mag, out):
         for ti, v in zip(t, u):
             rows.append([f"{ti:.1f}", f"{F}", f"{v * vmax:.4f}", str(s), f"{flat[i]:.5f}"])
             i += 1
-    write(out, [("specimen", "scp"), ("genc", f"{effect} {mag} loads {loads} kind {kind} dt {dt} {how}")],
+    write_csv(out, [("specimen", "scp"), ("genc", f"{effect} {mag} loads {loads} kind {kind} dt {dt} {how}")],
           ["time_s", "load_g", "voltage_V", "segment", "disp_mm"], rows)
 
 
