@@ -32,6 +32,18 @@ std::vector<double> rich_input(std::mt19937& rng, double lo, double hi, int cycl
   return u;
 }
 
+// The truth's response to u from negative saturation, plus linear * u and Gaussian noise of
+// standard deviation sigma drawn in time order (none drawn when sigma is 0).
+Eigen::VectorXd noisy_response(std::mt19937& rng, const PreisachModel& truth,
+                               const std::vector<double>& u, double linear, double sigma) {
+  PreisachState s = PreisachState::negative_saturation(truth.grid());
+  Eigen::VectorXd y = truth.simulate(s, u);
+  std::normal_distribution<double> noise(0.0, sigma > 0.0 ? sigma : 1.0);
+  for (Eigen::Index t = 0; t < y.size(); ++t)
+    y[t] += linear * u[static_cast<std::size_t>(t)] + (sigma > 0.0 ? noise(rng) : 0.0);
+  return y;
+}
+
 TEST(PreisachFit, RecoversAKnownDensityFromNoiseFreeData) {
   std::mt19937 rng(31);
   for (int L : {4, 6, 8}) {
@@ -88,10 +100,7 @@ TEST(PreisachFit, CrossValidationBeatsTheUnregularisedFineGridOnNoisyData) {
   }
   const PreisachModel truth(grid, w / w.sum(), 0.0);
   const auto u = rich_input(rng, 0.0, 1.0, 30, 8);
-  PreisachState s = PreisachState::negative_saturation(grid);
-  Eigen::VectorXd y = truth.simulate(s, u);
-  std::normal_distribution<double> noise(0.0, 0.01);
-  for (Eigen::Index t = 0; t < y.size(); ++t) y[t] += noise(rng);
+  const Eigen::VectorXd y = noisy_response(rng, truth, u, 0.0, 0.01);
   const std::span<const double> ys(y.data(), y.size());
 
   PreisachFitOptions automatic;  // L and smoothness by cross-validation
@@ -127,9 +136,7 @@ TEST(PreisachFit, ReversibleTermIsRecoveredBesideTheOperator) {
     const PreisachModel truth = testing::random_model(rng, grid).with_output_affine(sign, 0.0);
     const double r = sign * share(rng) * std::abs(truth.total_mass());
     const auto u = rich_input(rng, 0.0, 10.0, 40, 7);
-    PreisachState s = PreisachState::negative_saturation(grid);
-    Eigen::VectorXd y = truth.simulate(s, u);
-    for (std::size_t t = 0; t < u.size(); ++t) y[static_cast<Eigen::Index>(t)] += r * u[t] / 10.0;
+    const Eigen::VectorXd y = noisy_response(rng, truth, u, r / 10.0, 0.0);
     const std::span<const double> ys(y.data(), y.size());
     PreisachFitOptions opt;
     opt.levels = L;
@@ -166,11 +173,7 @@ TEST(PreisachFit, CrossValidationTakesTheReversibleTermWhereTheResponseHasOne) {
     const PreisachModel truth = testing::random_model(rng, grid);
     const double r = 0.4 / 0.6 * truth.total_mass();  // 40 % of the response
     const auto u = rich_input(rng, 0.0, 1.0, 24, 6);
-    PreisachState s = PreisachState::negative_saturation(grid);
-    Eigen::VectorXd y = truth.simulate(s, u);
-    std::normal_distribution<double> noise(0.0, 0.005 * (truth.total_mass() + r));
-    for (std::size_t t = 0; t < u.size(); ++t)
-      y[static_cast<Eigen::Index>(t)] += r * u[t] + noise(rng);
+    const Eigen::VectorXd y = noisy_response(rng, truth, u, r, 0.005 * (truth.total_mass() + r));
     PreisachFitOptions opt;
     opt.candidate_levels = {8, 12, 16};
     opt.reversible = PreisachFitOptions::Reversible::kChosen;
@@ -199,10 +202,7 @@ TEST(PreisachFit, CrossValidationLeavesOutATermWhoseGainIsWithinOneStandardError
     const PreisachGrid grid{0.0, 1.0, 8};
     const PreisachModel truth = testing::random_model(rng, grid);
     const auto u = rich_input(rng, 0.0, 1.0, 24, 6);
-    PreisachState s = PreisachState::negative_saturation(grid);
-    Eigen::VectorXd y = truth.simulate(s, u);
-    std::normal_distribution<double> noise(0.0, 0.005 * truth.total_mass());
-    for (Eigen::Index t = 0; t < y.size(); ++t) y[t] += noise(rng);
+    const Eigen::VectorXd y = noisy_response(rng, truth, u, 0.0, 0.005 * truth.total_mass());
     PreisachFitOptions opt;
     opt.candidate_levels = {8};
     opt.grid_shifts = 1;
@@ -279,11 +279,8 @@ TEST(PreisachFit, TheThreadCountDoesNotChangeTheFit) {
     const PreisachGrid grid{0.0, 1.0, 10};
     const PreisachModel truth = testing::random_model(rng, grid);
     const auto u = rich_input(rng, 0.0, 1.0, 18, 6);
-    PreisachState s = PreisachState::negative_saturation(grid);
-    Eigen::VectorXd y = truth.simulate(s, u);
-    std::normal_distribution<double> noise(0.0, 0.01 * truth.total_mass());
-    for (Eigen::Index t = 0; t < y.size(); ++t)
-      y[t] += 0.3 * truth.total_mass() * u[t] + noise(rng);
+    const Eigen::VectorXd y =
+        noisy_response(rng, truth, u, 0.3 * truth.total_mass(), 0.01 * truth.total_mass());
     PreisachFitOptions opt;
     opt.candidate_levels = {6, 8, 12};
     opt.grid_shifts = trial % 2 == 0 ? 4 : 5;

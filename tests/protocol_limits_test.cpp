@@ -59,8 +59,10 @@ TEST(ProtocolLimits, FollowTheRigsProtocolOverManyScenarios) {
   EXPECT_GT(drift_shown, 0);
 }
 
-// Hand-built records: falling loads hide a drift as rising ones do; two loads are no order; a
-// record without a clock says nothing of creep (diagnose does not test creep there and says so).
+// Hand-built records: falling loads hide a drift as rising ones do; two loads in three
+// segments are no order; two or three loads each tested once hide a drift across segments,
+// three loads a map beyond quadratic; a record without a clock says nothing of creep
+// (diagnose does not test creep there and says so).
 TEST(ProtocolLimits, LoadOrderClockAndHolds) {
   auto voltage_test = [](const std::vector<double>& loads_N) {
     DiagnoseData d;
@@ -83,6 +85,16 @@ TEST(ProtocolLimits, LoadOrderClockAndHolds) {
             (std::vector<std::string>{"creep"}));
   EXPECT_EQ(effects_of(protocol_limits_of(voltage_test({0.3, 0.9, 0.3}))),
             (std::vector<std::string>{"creep"}));
+  // Three loads fix the quadratic maps, in any order and with one of them tested twice; two or
+  // three loads each tested once fix every segment's offset, in any order.
+  EXPECT_EQ(effects_of(protocol_limits_of(voltage_test({0.3, 0.9, 0.5}))),
+            (std::vector<std::string>{"creep", "offset_nonlinearity", "drift"}));
+  EXPECT_EQ(effects_of(protocol_limits_of(voltage_test({0.3, 0.5, 0.9}))),
+            (std::vector<std::string>{"creep", "offset_nonlinearity", "drift"}));
+  EXPECT_EQ(effects_of(protocol_limits_of(voltage_test({0.3, 0.9, 0.5, 0.3}))),
+            (std::vector<std::string>{"creep", "offset_nonlinearity"}));
+  EXPECT_EQ(effects_of(protocol_limits_of(voltage_test({0.9, 0.3}))),
+            (std::vector<std::string>{"creep", "drift"}));
 
   DiagnoseData varied = voltage_test({0.5, 0.9, 0.3, 0.7});
   for (std::size_t t = 1; t < varied.time_s.size(); ++t)
