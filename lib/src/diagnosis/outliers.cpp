@@ -237,7 +237,12 @@ std::vector<double> ramp_scores(const Record& rec, double resolution) {
 // and noisy the removal of one spike gains nothing measurable, which is what this is for
 // (three fresh records of the independent generator: spikes of 5 and 10 % at a turning value
 // scored 4.6-6.8 off their neighbours and 8-16 off their protocol points, and were named
-// `none`).
+// `none`). Not where another reading at its protocol point, or in its memory state on another
+// rise, stands off the same way by at least half as much (ProtocolPoints::shared): a
+// deviation met twice is the model's, as a spike's never is (measured, session 44: fourth-
+// generator voltage creeps, a thermal lag of the drive, the readings at 0 W after each descent
+// of one segment and on its first and later rises 18-21 off the other segments' readings
+// there, alike within the segment, three records named `outliers` over creep).
 constexpr double kFlag = 6.0, kFirm = 8.0, kSure = 10.0;
 constexpr double kCandidate = 4.0, kRepro = 6.0;
 // A reading within kRepeated robust sigmas of the readings at its protocol point is repeated
@@ -514,7 +519,8 @@ OutlierScreen screen_outliers(const Context& ctx) {
     const double lv = std::abs(level[i] - r_med) / r_scale;
     const bool by_neighbours = !at_top && !near(through, t) && !near(lone_guess, t);
     if (by_neighbours) zmax = std::max(zmax, std::min(z[t], 1.6 * lv) / strict);
-    const bool repeats_not = z[t] > kCandidate && lv > kFlag / 2.0 && repro > kRepro;
+    const bool repeats_not = z[t] > kCandidate && lv > kFlag / 2.0 && repro > kRepro &&
+                             !points.shared(res, t) && !alike.shared(res, t);
     if (repeats_not) {
       ++confirmed;
       repro_max = std::max(repro_max, repro);
