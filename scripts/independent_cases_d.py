@@ -167,11 +167,11 @@ def sensor(rng, ys, span, mm_per_unit):
     return out, f"noise {sigma / span:.3f} q {q}"
 
 
-def response(rng, ys, length):
+def response(rng, length):
     """Column name and formatter: strain (fraction) or disp_mm, the model in mm."""
     if rng.random() < 0.5:
-        return "strain", (lambda y: f"{y / length:.7f}"), 1.0
-    return "disp_mm", (lambda y: f"{y:.5f}"), 1.0
+        return "strain", (lambda y: f"{y / length:.7f}")
+    return "disp_mm", (lambda y: f"{y:.5f}")
 
 
 def load_column(rng, newtons):
@@ -194,7 +194,7 @@ def make_load(rng, effect, mag, out):
     ys, how = effects(rng, "creep_out" if effect == "creep" else effect, mag, ys, t, span)
     length = rng.choice([80.0, 100.0, 150.0])
     ys, noise = sensor(rng, ys, span, 1.0)
-    name, fmt, _ = response(rng, ys, length)
+    name, fmt = response(rng, length)
     lcol, loads = load_column(rng, [x * top for x in u])
     rows = [[f"{ti:.1f}", l, fmt(y)] for ti, l, y in zip(t, loads, ys)]
     write_csv(out, [("specimen", "thread"), ("length_mm", f"{length:g}"),
@@ -253,7 +253,7 @@ def make_voltage(rng, effect, mag, out):
     e = "creep_out" if effect == "creep" and not creep_lag else effect
     rows_y, how2 = effects(rng, e, mag, rows_y, rows_t, span)
     rows_y, noise = sensor(rng, rows_y, span, 1.0)
-    name, fmt, _ = response(rng, rows_y, L)
+    name, fmt = response(rng, L)
     lcol, loads = load_column(rng, rows_F)
     # power heats like voltage squared: the file's input is the power when `power` is set
     ucol = "power_W" if power else "voltage_V"
