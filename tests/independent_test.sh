@@ -121,7 +121,9 @@
 #   and 5013), `unexplained` while three loads were held out by load (the middle load predicted
 #   by straight maps through the end loads); and a load-shape coupling at three loads (seed
 #   4102), named `offset_nonlinearity` then. Held out by cycles inside the segments: `none`,
-#   `none`, `load_shape_coupling`.
+#   `none`, `load_shape_coupling`. And a clean voltage record at four loads (seed 6116), its
+#   segments read every 0.5 or 2 s along ramps, named `creep` while the hold-time test permuted
+#   the reading intervals across the segments (p = 1e-4); permuted within each segment: `none`.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -179,6 +181,7 @@ python3 "$src/scripts/independent_cases_d.py" "$work/d" 1 5006 voltage-none || e
 python3 "$src/scripts/independent_cases_d.py" "$work/d" 1 5013 voltage-none || exit 1
 python3 "$src/scripts/independent_cases_d.py" "$work/d" 1 4102 voltage-load_shape_coupling ||
   exit 1
+python3 "$src/scripts/independent_cases_d.py" "$work/d" 1 6116 voltage-none || exit 1
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -247,5 +250,6 @@ expect_not "$work/c/load-drift-6030.csv" lonely_stroke
 expect "$work/d/voltage-none-5006.csv" none
 expect "$work/d/voltage-none-5013.csv" none
 expect "$work/d/voltage-load_shape_coupling-4102.csv" load_shape_coupling
+expect "$work/d/voltage-none-6116.csv" none
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]
