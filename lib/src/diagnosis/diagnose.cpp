@@ -45,6 +45,11 @@ constexpr double kCreepOverLonely = 1.25;
 /// Fewer held-out readings than this whose memory their training identified cannot show
 /// structure beside the baseline's gaps.
 constexpr std::size_t kMinIdentified = 10;
+/// Below materiality, what the load maps miss is named where the held-out error (without its
+/// largest 5 %) is this many noise floors...
+constexpr double kMapsMissFloors = 1.5;
+/// ... and where the per-segment maps explain more than this share of it.
+constexpr double kMapsMissShare = 0.7;
 
 /// Held-out E_RMS (% of range) of the given readings without the largest 5 % of the residuals.
 double sustained_rms_pct(const diagnosis::Context& ctx, const std::vector<std::size_t>& rows) {
@@ -427,8 +432,11 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   // residuals that a per-segment affine map of H explains, named where the residuals are material
   // (maps_miss_by_signature).
   bool maps_miss = false;
+  double maps_share = 0.0;
   for (const Finding& f : d.findings) {
-    if (f.effect == "offset_nonlinearity") maps_miss = maps_miss_by_signature(ctx, f);
+    if (f.effect != "offset_nonlinearity") continue;
+    maps_miss = maps_miss_by_signature(ctx, f);
+    maps_share = f.score;
   }
   // What the maps miss below five loads may be a drift: the segments' offsets then follow the
   // order the loads were tested in, and with three training offsets neither a map beyond
@@ -439,6 +447,24 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   // 15 named offset_nonlinearity by what the maps miss, the 11 offset knees had time signatures
   // of p >= 0.34 (or none available); of the 4 drifts one had p = 7e-6 (second generator, 10 %,
   // four loads tested in increasing order) and is now `drift`, the others p >= 0.26 or none.
+  // Below materiality too, where the held-out error stands 1.5 times off the noise floor and
+  // the per-segment maps explain more than 70 % of it: the error is then offsets and ranges at
+  // the held-out loads, which a baseline's misfit of the loop shape is not. Noise in the
+  // training segments moves the maps too (most where it is correlated), so the share must stand
+  // clear of what clean records reach. Measured on fresh voltage records of the second to
+  // fourth generators (seeds 6100-6219): of 149 clean ones at four or five loads the largest
+  // shares at p < alpha were 0.60 (1.5 floors) and 0.56 (2.1 floors, `unexplained`), both
+  // with AR(1) noise; of five knees at four loads named `none` before (seeds 6105, 6109, 6117
+  // and the kept sets' c20 2001, d42 4202), four had 0.74-0.88 at 1.9-2.6 floors, one 0.62
+  // (1.7 floors, still `none`).
+  const bool maps_named =
+      maps_miss &&
+      (material || (maps_share > kMapsMissShare &&
+                    d.sustained_rms_pct_range > kMapsMissFloors * d.noise_floor_pct_range));
+  const std::string maps_error =
+      material ? "the held-out error is material and mostly"
+               : fmt::format("the held-out error, {:.1f} times the noise floor, is mostly",
+                             d.sustained_rms_pct_range / d.noise_floor_pct_range);
   const bool holds_move = ctx.holds.available && ctx.holds.p_value < opt.alpha;
   const bool noncongruent = ctx.congruency.available && ctx.congruency.p_value < opt.alpha / 10.0 &&
                             ctx.congruency_robust.p_value < opt.alpha / 5.0 && !holds_move;
@@ -452,17 +478,17 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
     name_by_signature("minor_loop_noncongruence",
                       "no extension of the vocabulary models these loops well enough to gain on "
                       "held-out cycles");
-  } else if (material && maps_miss && drift_in_time) {
-    name_by_signature("drift",
-                      "the held-out error is material and mostly offsets at the held-out loads, "
-                      "where no map beyond quadratic (nor a trend beside it) can be held out, "
-                      "and readings in one memory state within a load segment differ with the "
-                      "time between them, which no static map of the load makes them do");
-  } else if (material && maps_miss) {
+  } else if (maps_named && drift_in_time) {
+    name_by_signature("drift", maps_error +
+                                   " offsets at the held-out loads, where no map beyond quadratic "
+                                   "(nor a trend beside it) can be held out, and readings in one "
+                                   "memory state within a load segment differ with the time "
+                                   "between them, which no static map of the load makes them do");
+  } else if (maps_named) {
     name_by_signature("offset_nonlinearity",
-                      "the held-out error is material and mostly what the maps miss at the "
-                      "held-out loads, which no map beyond quadratic that can be held out "
-                      "there models");
+                      maps_error +
+                          " what the maps miss at the held-out loads, which no map beyond "
+                          "quadratic that can be held out there models");
   }
   if ((d.cause == "none" || d.cause == "unexplained") && rec.fold_kind == "load segments") {
     for (Finding& f : d.findings) {
