@@ -88,21 +88,23 @@ Signature dwell_signature(Context& ctx, double hold) {
   for (std::size_t t = 1; t < n; ++t) {
     if (rec.seg[t] == rec.seg[t - 1] && dt[t] > 0.0) movable.push_back(t);
   }
-  // The movable rows of each segment, and whether the holds vary within any of them.
+  // The movable rows of each segment and their hold times (shuffled in place below,
+  // permutation after permutation), and whether the holds vary within any segment.
   std::vector<std::vector<std::size_t>> strata;
-  bool vary = false;
+  std::vector<std::vector<double>> pools;
   for (std::size_t i = 0; i < movable.size(); ++i) {
     const std::size_t t = movable[i];
-    if (i == 0 || rec.seg[t] != rec.seg[movable[i - 1]]) strata.emplace_back();
-    strata.back().push_back(t);
-  }
-  for (const auto& rows : strata) {
-    double lo = HUGE_VAL, hi = 0.0;
-    for (std::size_t t : rows) {
-      lo = std::min(lo, dt[t]);
-      hi = std::max(hi, dt[t]);
+    if (i == 0 || rec.seg[t] != rec.seg[movable[i - 1]]) {
+      strata.emplace_back();
+      pools.emplace_back();
     }
-    vary = vary || hi > 1.05 * lo;
+    strata.back().push_back(t);
+    pools.back().push_back(dt[t]);
+  }
+  bool vary = false;
+  for (const auto& pool : pools) {
+    const auto [lo, hi] = std::minmax_element(pool.begin(), pool.end());
+    vary = vary || *hi > 1.05 * *lo;
   }
   if (movable.size() < 20 || !vary) return s;  // the holds do not vary within a segment
   s.available = true;
@@ -128,12 +130,6 @@ Signature dwell_signature(Context& ctx, double hold) {
   };
   const double observed = statistic(dt, &s.estimate);
   std::vector<double> shuffled(dt);
-  // Each segment's hold times, shuffled in place permutation after permutation.
-  std::vector<std::vector<double>> pools;
-  for (const auto& rows : strata) {
-    pools.emplace_back();
-    for (std::size_t t : rows) pools.back().push_back(dt[t]);
-  }
   // Its own stream: the other tests' draws stay as they were.
   const int permutations = dwell_permutations(ctx.opt);
   int above = 0;
