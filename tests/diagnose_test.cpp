@@ -167,6 +167,41 @@ TEST(Diagnose, CreepSeenDuringHoldsOnVoltageTests) {
   expect_named("voltage", "creep", {1}, [](RigSpec& r) { r.voltage.readings_per_hold = 3; });
 }
 
+// Creep ten and thirty holds slow (tau 100 and 300 s, 10 s holds read twice, a 0.04 mm sensor
+// step): a held reading moves by less than the sensor resolves, so the readings during holds
+// show nothing, while the lag carried from step to step builds up along the path. The Kelvin
+// element fitted through the filter names it by its held-out gain (session 46; before, the
+// Prony series of 0.3-3 holds gained -3.9 to 4.4 % on these and they were named unexplained,
+// drift and none). The same protocols without creep are none.
+TEST(Diagnose, CreepMuchSlowerThanTheHoldsReadDuringHolds) {
+  SCPKIT_SKIP_UNDER_SANITIZERS();
+  struct Case {
+    std::uint64_t seed;
+    double noise_mm, creep, tau_s;
+  };
+  for (const Case& c :
+       {Case{502, 0.01, 0.3, 100.0}, Case{502, 0.01, 0.3, 300.0}, Case{506, 0.005, 0.1, 100.0},
+        Case{502, 0.01, 0.0, 100.0}, Case{506, 0.005, 0.0, 100.0}}) {
+    testing::Scenario s = make_scenario("load", "none", 0);
+    RigSpec& r = s.spec;
+    r.seed = c.seed;
+    r.specimen = "thread";
+    r.plies = 4;
+    r.noise_mm = c.noise_mm;
+    r.protocol = LoadProtocol{};
+    r.protocol.cycles = 6;
+    r.protocol.minor_loops = 2;
+    r.protocol.readings_per_hold = 2;
+    r.protocol.dwell_s = 10.0;
+    r.effects = RigEffects{};
+    r.effects.creep = c.creep;
+    r.effects.creep_tau_s = c.tau_s;
+    const Diagnosis d = testing::diagnose_scenario(s);
+    EXPECT_EQ(d.cause, c.creep > 0.0 ? "creep" : "none")
+        << "seed " << c.seed << " creep " << c.creep << " tau " << c.tau_s << " s";
+  }
+}
+
 // Creep slower than the holds (PHYSICS.md: time constants 1-100 s against 10-180 s dwells),
 // one reading per hold: the lag accumulates over several steps, which no loop width mimics.
 TEST(Diagnose, CreepSlowerThanTheHolds) {

@@ -46,6 +46,10 @@ struct Context {
   Signature congruency, holds;
   Signature congruency_robust;  ///< the same, blind to single readings off their neighbours
   Signature dwell;  ///< creep with one reading per hold: residuals against the hold times
+  /// Creep with readings during holds named by the Kelvin element's held-out gain while the
+  /// readings during holds do not move at alpha (detect_creep): known by a gain only, it
+  /// competes by gain and yields to a drift seen in time (diagnose.cpp).
+  bool creep_by_gain_only = false;
   /// Held-out readings whose memory their fold's training identified (identified_readings).
   std::vector<char> identified;
   /// Folds whose training rows chose a lonely-stroke term (detect_lonely_stroke).
