@@ -204,18 +204,39 @@ Finding detect_drift(Context& ctx) {
   if (by_segment) map = drift_in_offset_map(ctx);
   std::vector<double> origin(rec.seg_first.size(), t0);  // each segment's time origin
   if (by_segment) origin = segment_mean_times(rec);
+  // Powers 1 .. degree of the time since each segment's origin, in units of the record.
+  const auto powers_of_time = [&](int degree) {
+    return [&rec, &origin, t0, t1, degree](const FoldFit&) {
+      Eigen::MatrixXd X(static_cast<Eigen::Index>(rec.size()), degree);
+      for (std::size_t t = 0; t < rec.size(); ++t) {
+        const double x = (rec.time[t] - origin[static_cast<std::size_t>(rec.seg[t])]) / (t1 - t0);
+        for (Eigen::Index j = 0; j < degree; ++j)
+          X(static_cast<Eigen::Index>(t), j) = std::pow(x, static_cast<double>(j + 1));
+      }
+      return X;
+    };
+  };
   Finding f = feature_finding(
       ctx, "drift",
       by_segment ? "augmented baseline + linear trend in time within each load segment"
                  : "baseline + linear trend in time",
-      [&](const FoldFit&) {
-        Eigen::MatrixXd X(static_cast<Eigen::Index>(rec.size()), 1);
-        for (std::size_t t = 0; t < rec.size(); ++t)
-          X(static_cast<Eigen::Index>(t), 0) =
-              (rec.time[t] - origin[static_cast<std::size_t>(rec.seg[t])]) / (t1 - t0);
-        return X;
-      },
+      powers_of_time(1),
       by_segment ? "a trend in time within each load segment" : "a linear trend in time");
+  if (!by_segment) {
+    // Load tests: a trend that turns or settles as well (PHYSICS.md section 5, "low-order trend
+    // in time"). A line fitted on the folds around a held-out block mispredicts a drift that
+    // rises and falls back: a fourth-generator half-sine swing at a 0.04 mm step (seed 4102)
+    // gained -37.6 % with a line, 25.6 % with the quadratic. Reported where it is detected and
+    // gains more than the line; its permutation test draws from a stream of its own, so the
+    // detectors after it keep their p-values. Measured (session 47): the 100 load records of
+    // the five independent generators' standing sets, load drifts 17/20 -> 19/20 and no other
+    // name changed; fresh load drifts (seeds 4600-4609) 39/50 -> 40/50; fresh load creeps 22/40
+    // and 100 fresh clean load records as before; the rig's load cells as before.
+    const OwnStream own(ctx, 13);
+    Finding curved = feature_finding(ctx, "drift", "baseline + quadratic trend in time",
+                                     powers_of_time(2), "a quadratic trend in time");
+    if (curved.detected && !(f.detected && f.gain_pct >= curved.gain_pct)) f = std::move(curved);
+  }
   if (by_segment && !(f.gain_pct > map.gain_pct)) f = map;
   if (!by_segment) {
     // Reported where both are detected and it gains more: it sizes a drift the two-stage
