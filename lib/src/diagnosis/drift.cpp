@@ -223,15 +223,17 @@ Finding detect_drift(Context& ctx) {
       powers_of_time(1),
       by_segment ? "a trend in time within each load segment" : "a linear trend in time");
   if (!by_segment) {
-    // Load tests: a trend that turns or settles as well (PHYSICS.md section 5, "low-order trend
-    // in time"). A line fitted on the folds around a held-out block mispredicts a drift that
-    // rises and falls back: a fourth-generator half-sine swing at a 0.04 mm step (seed 4102)
-    // gained -37.6 % with a line, 25.6 % with the quadratic. Reported where it is detected and
-    // gains more than the line; its permutation test draws from a stream of its own, so the
-    // detectors after it keep their p-values. Measured (session 47): the 100 load records of
-    // the five independent generators' standing sets, load drifts 17/20 -> 19/20 and no other
-    // name changed; fresh load drifts (seeds 4600-4609) 39/50 -> 40/50; fresh load creeps 22/40
-    // and 100 fresh clean load records as before; the rig's load cells as before.
+    // Records held out by cycles (load tests; tests at one to three loads): a trend that turns
+    // or settles as well (PHYSICS.md section 5, "low-order trend in time"). A line fitted on the
+    // folds around a held-out block mispredicts a drift that rises and falls back: a
+    // fourth-generator half-sine swing at a 0.04 mm step (seed 4102) gained -37.6 % with a
+    // line, 25.6 % with the quadratic. Reported where it is detected and gains more than the line;
+    // its permutation test draws from a stream of its own, so the detectors after it keep their
+    // p-values. Measured (session 47): the 100 load records of the five independent generators'
+    // standing sets, load drifts 17/20 -> 19/20 and no other name changed; fresh load drifts (seeds
+    // 4600-4609) 39/50 -> 40/50; fresh load creeps 22/40 and 100 fresh clean load records as
+    // before; the rig's load cells as before; the seven voltage records of three loads in those
+    // sets as before.
     const OwnStream own(ctx, 13);
     Finding curved = feature_finding(ctx, "drift", "baseline + quadratic trend in time",
                                      powers_of_time(2), "a quadratic trend in time");
