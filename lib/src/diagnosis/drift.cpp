@@ -210,8 +210,8 @@ Finding detect_drift(Context& ctx) {
       Eigen::MatrixXd X(static_cast<Eigen::Index>(rec.size()), degree);
       for (std::size_t t = 0; t < rec.size(); ++t) {
         const double x = (rec.time[t] - origin[static_cast<std::size_t>(rec.seg[t])]) / (t1 - t0);
-        for (Eigen::Index j = 0; j < degree; ++j)
-          X(static_cast<Eigen::Index>(t), j) = std::pow(x, static_cast<double>(j + 1));
+        double power = 1.0;
+        for (Eigen::Index j = 0; j < degree; ++j) X(static_cast<Eigen::Index>(t), j) = power *= x;
       }
       return X;
     };
@@ -222,6 +222,7 @@ Finding detect_drift(Context& ctx) {
                  : "baseline + linear trend in time",
       powers_of_time(1),
       by_segment ? "a trend in time within each load segment" : "a linear trend in time");
+  if (by_segment && !(f.gain_pct > map.gain_pct)) f = map;
   if (!by_segment) {
     // Records held out by cycles (load tests; tests at one to three loads): a trend that turns
     // or settles as well (PHYSICS.md section 5, "low-order trend in time"). A line fitted on the
@@ -234,13 +235,12 @@ Finding detect_drift(Context& ctx) {
     // 4600-4609) 39/50 -> 40/50; fresh load creeps 22/40 and 100 fresh clean load records as
     // before; the rig's load cells as before; the seven voltage records of three loads in those
     // sets as before.
-    const OwnStream own(ctx, 13);
-    Finding curved = feature_finding(ctx, "drift", "baseline + quadratic trend in time",
-                                     powers_of_time(2), "a quadratic trend in time");
-    if (curved.detected && !(f.detected && f.gain_pct >= curved.gain_pct)) f = std::move(curved);
-  }
-  if (by_segment && !(f.gain_pct > map.gain_pct)) f = map;
-  if (!by_segment) {
+    {
+      const OwnStream own(ctx, 13);
+      Finding curved = feature_finding(ctx, "drift", "baseline + quadratic trend in time",
+                                       powers_of_time(2), "a quadratic trend in time");
+      if (curved.detected && !(f.detected && f.gain_pct >= curved.gain_pct)) f = std::move(curved);
+    }
     // Reported where both are detected and it gains more: it sizes a drift the two-stage
     // extension found, and does not find one of its own (a clean third-generator record, a
     // damped protocol whose turning points rise through the record, gained 18.7 % at p = 0.001,
