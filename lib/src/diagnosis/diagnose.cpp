@@ -321,23 +321,16 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   // 0.05).
   // On a test at several loads driven by voltage, power or temperature, readings in one memory
   // state within a load segment that differ before and after the segment's first rise are the
-  // lonely stroke's model-free signature (its lowest drive resets every hysteron of a plane on
-  // the tested inputs, section 4 of PHYSICS.md), which no static map of the load makes: an
+  // lonely stroke's model-free signature (the lowest drive resets every hysteron of a plane on
+  // the tested inputs, PHYSICS.md section 4), which no static map of the load makes. So an
   // offset nonlinearity yields to it as to a detected lonely stroke, and where nothing is
-  // detected it names the cause, ahead of what the maps miss at the held-out loads (a lonely
+  // detected it names the cause ahead of what the maps miss at the held-out loads (a lonely
   // stroke shifts each segment's offset with the direction of its load change, which smooth
-  // maps miss too: 98 % of a fourth-generator record's held-out error). At alpha / 10, the
-  // level of a signature named alone. Measured (session 48): the smallest p on 100 fresh clean
-  // voltage records of the five independent generators (seeds 4700-4719) was 0.018, on 50 fresh
-  // offset nonlinearities (seeds 4700-4709) 0.019, on the 32 drift, load-shape and offset
-  // records of the standing sets 0.013; fresh lonely strokes (seeds 4700-4709) went from 39/50
-  // to 47/50 (five `none`, three named offset_nonlinearity by the maps' signature, p 1e-17 to
-  // 1e-232), and no offset record changed its name. The offset must also be three times the
-  // noise (its standard deviation with the lag-one correlation, Context::noise_sd): under AR(1)
-  // noise the test's p runs small (first generator, --ar-noise 0.7: 2 of 15 clean records at
-  // p = 1.6e-4 and 2.1e-4, offsets of 1.9 and 2.3 noise sd; at 0.5, 20 clean, smallest p 0.0015),
-  // while the named lonely strokes' offsets were 3.1-22 noise sd, but for one of 2.1 (fourth
-  // generator, standing seed 4101, p = 2e-16), which this leaves `offset_nonlinearity`.
+  // maps miss too). At alpha / 10, the level of a signature named alone, and at least
+  // kLonelyOffsetNoises noise sd (with the lag-one correlation): under AR(1) noise of rho 0.7
+  // two of 15 clean records gave p = 1.6e-4 and 2.1e-4 at 1.9 and 2.3 sd. Measured (session 48,
+  // docs/diagnose-log.md): clean and offset-nonlinearity voltage records of the five independent
+  // generators unchanged (smallest p 0.018 and 0.019), fresh lonely strokes 39/50 -> 47/50.
   const auto& rp = ctx.return_point.running_max;
   const bool lonely_offset_across_loads =
       rec.several_loads && !rec.input_is_load && rp.available && rp.p_value < opt.alpha / 10.0 &&
@@ -432,7 +425,6 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   // of 5e-5 mm came out at p = 0.0006.
   const bool lonely_offset = !rec.several_loads && !rec.input_is_load && rp.available &&
                              rp.p_value < level && std::abs(rp.estimate) >= ctx.floor;
-
   // Likewise with readings during holds: they move in the direction of the last input step
   // (hold_signature) while the Prony series gains too little to show (measured: a fresh
   // independent-generator record, 10 % creep at 0.02 mm noise, three readings per hold,
