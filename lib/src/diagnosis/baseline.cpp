@@ -176,6 +176,18 @@ double MapFit::eval(const std::vector<double>& c, double F) const {
   return v;
 }
 
+MapFit maps_through_trained(const Record& rec, const FoldFit& fit, const std::vector<double>& a) {
+  std::vector<double> F, A, B;
+  for (std::size_t s = 0; s < rec.seg_first.size(); ++s) {
+    if (!fit.free[s]) continue;
+    F.push_back(rec.seg_load[s]);
+    A.push_back(a[s]);
+    B.push_back(fit.b[s]);
+  }
+  const auto [flo, fhi] = std::minmax_element(rec.seg_load.begin(), rec.seg_load.end());
+  return fit_maps(F, A, B, 0.0, *flo, *fhi - *flo);
+}
+
 MapFit fit_maps(const std::vector<double>& F, const std::vector<double>& a,
                 const std::vector<double>& b, double knee_width, double f_lo, double f_scale,
                 bool cubic) {
@@ -352,15 +364,7 @@ FoldFit Baseline::fit(const std::vector<char>& train, const Variant& variant) co
     if (iteration > 0 && change < settled) break;
   }
   // Segments without training rows: the quadratic maps through the trained ones.
-  std::vector<double> F, A, B;
-  for (std::size_t s = 0; s < S; ++s) {
-    if (!out.free[s]) continue;
-    F.push_back(rec_.seg_load[s]);
-    A.push_back(out.a[s]);
-    B.push_back(out.b[s]);
-  }
-  const auto [flo, fhi] = std::minmax_element(rec_.seg_load.begin(), rec_.seg_load.end());
-  const MapFit maps = fit_maps(F, A, B, 0.0, *flo, *fhi - *flo);
+  const MapFit maps = maps_through_trained(rec_, out, out.a);
   for (std::size_t s = 0; s < S; ++s) {
     if (out.free[s]) continue;
     out.a[s] = maps.eval(maps.coef_a, rec_.seg_load[s]);

@@ -80,6 +80,10 @@ struct FoldFit {
   std::vector<char> free;    ///< several loads: the segment had training rows
 };
 
+/// The quadratic maps through the segments `fit` trained (its free ones): offsets `a` (the
+/// fit's own, or corrected by an extension) and the fit's ranges, on the record's load span.
+MapFit maps_through_trained(const Record& rec, const FoldFit& fit, const std::vector<double>& a);
+
 /// A causal linear filter on the model's output (PreisachFitOptions::output_filter).
 using OutputFilter = std::function<void(Eigen::Ref<Eigen::VectorXd>)>;
 

@@ -58,19 +58,15 @@ Finding drift_in_offset_map(Context& ctx) {
         if (m < 4) return fit.pred;
         Eigen::MatrixXd A(m, 4);
         Eigen::VectorXd a(m);
-        std::vector<double> F, B, Aoff;
         for (Eigen::Index i = 0; i < m; ++i) {
           const std::size_t s = train[static_cast<std::size_t>(i)];
           const double x = (rec.seg_load[s] - f_lo) / f_scale;
           A.row(i) << 1.0, x, x * x, seg_time[s];
           a[i] = fit.a[s];
-          F.push_back(rec.seg_load[s]);
-          Aoff.push_back(fit.a[s]);
-          B.push_back(fit.b[s]);
         }
         const Eigen::VectorXd c = A.colPivHouseholderQr().solve(a);
         betas += fmt::format("{}{:.3g}", betas.empty() ? "" : ", ", c[3]);
-        const MapFit maps = fit_maps(F, Aoff, B, 0.0, f_lo, f_scale);
+        const MapFit maps = maps_through_trained(rec, fit, fit.a);
         std::vector<double> p(fit.pred);
         for (std::size_t t = 0; t < rec.size(); ++t) {
           const auto s = static_cast<std::size_t>(rec.seg[t]);
@@ -99,8 +95,6 @@ Finding drift_in_offset_map(Context& ctx) {
 // The map cannot take up the drift here: beta comes from inside the segments only.
 std::optional<Finding> drift_sized_within_segments(Context& ctx) {
   const Record& rec = ctx.rec;
-  const auto [flo, fhi] = std::minmax_element(rec.seg_load.begin(), rec.seg_load.end());
-  const double f_lo = *flo, f_scale = std::max(*fhi - *flo, 1e-300);
   const double t0 = rec.time.front(), t1 = std::max(rec.time.back(), t0 + 1e-300);
   constexpr double kSettling[] = {0.0, 0.1, 0.2, 0.4, 0.8};  // 0: a line
   const auto g = [&](double T, std::size_t t) {
@@ -116,22 +110,30 @@ std::optional<Finding> drift_sized_within_segments(Context& ctx) {
       "training segments, the offset map fitted through the offsets less it",
       [&](int k) {
         const FoldFit& fit = ctx.by_fold[static_cast<std::size_t>(k)];
+        // Four training offsets, as for the map's trend above (five loads or more): with three
+        // the quadratic is exactly determined, and the drift's correction moves the held-out
+        // offsets freely (measured, four loads: a fourth-generator knee and lonely stroke named
+        // `drift`, their folds choosing a line in one and a warm-up of T 0.1 in the other).
+        if (std::count(fit.free.begin(), fit.free.end(), 1) < 4) return fit.pred;
+        // The training rows: each one's segment, and each segment's mean of g.
+        auto trained = [&](std::size_t t) {
+          return rec.trains(t, k) && fit.free[static_cast<std::size_t>(rec.seg[t])];
+        };
         double best_sse = std::numeric_limits<double>::infinity(), beta = 0.0, shape = 0.0;
         std::vector<double> best_mean;
         for (double T : kSettling) {
           std::vector<double> mean(S, 0.0), count(S, 0.0);
           for (std::size_t t = 0; t < rec.size(); ++t) {
-            const auto s = static_cast<std::size_t>(rec.seg[t]);
-            if (!rec.trains(t, k) || !fit.free[s]) continue;
-            mean[s] += g(T, t);
-            count[s] += 1.0;
+            if (!trained(t)) continue;
+            mean[static_cast<std::size_t>(rec.seg[t])] += g(T, t);
+            count[static_cast<std::size_t>(rec.seg[t])] += 1.0;
           }
           for (std::size_t s = 0; s < S; ++s) mean[s] = count[s] > 0.0 ? mean[s] / count[s] : 0.0;
           double zz = 0.0, zr = 0.0, rr = 0.0;
           for (std::size_t t = 0; t < rec.size(); ++t) {
-            const auto s = static_cast<std::size_t>(rec.seg[t]);
-            if (!rec.trains(t, k) || !fit.free[s]) continue;
-            const double z = g(T, t) - mean[s], r = rec.y[t] - fit.pred[t];
+            if (!trained(t)) continue;
+            const double z = g(T, t) - mean[static_cast<std::size_t>(rec.seg[t])];
+            const double r = rec.y[t] - fit.pred[t];
             zz += z * z;
             zr += z * r;
             rr += r * r;
@@ -142,26 +144,17 @@ std::optional<Finding> drift_sized_within_segments(Context& ctx) {
             best_sse = sse;
             beta = zr / zz;
             shape = T;
-            best_mean = mean;
+            best_mean = std::move(mean);
           }
         }
-        std::vector<double> F, A, B;
-        for (std::size_t s = 0; s < S; ++s) {
-          if (!fit.free[s]) continue;
-          F.push_back(rec.seg_load[s]);
-          A.push_back(fit.a[s] - (best_mean.empty() ? 0.0 : beta * best_mean[s]));
-          B.push_back(fit.b[s]);
-        }
-        // Four training offsets, as for the map's trend above (five loads or more): with three
-        // the quadratic is exactly determined, and the drift's correction moves the held-out
-        // offsets freely (measured, four loads: a fourth-generator knee and lonely stroke named
-        // `drift`, their folds choosing a line in one and a warm-up of T 0.1 in the other).
-        if (best_mean.empty() || F.size() < 4) return fit.pred;
+        if (best_mean.empty()) return fit.pred;
         fitted = true;
         chosen +=
             fmt::format("{}{} {:.3g}", chosen.empty() ? "" : "; ",
                         shape > 0.0 ? fmt::format("T {:g},", shape) : std::string("line,"), beta);
-        const MapFit maps = fit_maps(F, A, B, 0.0, f_lo, f_scale);
+        std::vector<double> offsets(fit.a);
+        for (std::size_t s = 0; s < S; ++s) offsets[s] -= beta * best_mean[s];
+        const MapFit maps = maps_through_trained(rec, fit, offsets);
         std::vector<double> p(fit.pred);
         for (std::size_t t = 0; t < rec.size(); ++t) {
           const auto s = static_cast<std::size_t>(rec.seg[t]);
