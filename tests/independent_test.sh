@@ -146,6 +146,10 @@
 #   by what the maps miss at the held-out loads (92 and 81 % of the held-out error): `drift`.
 #   And the fourth generator's knee at four loads (seed 4102), `none`, which the same extension
 #   fitted at four loads named `drift` (the quadratic through three offsets moves freely).
+# - bursts (session 50): the fourth generator's outliers come one to three consecutive readings
+#   at a time; seeds 5002 and 5201 (load), a burst of three on a descent and one in the first
+#   rise, and one of three met by a single other pass, named `none` and `unexplained` before
+#   the burst tier: `outliers`.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -218,6 +222,8 @@ python3 "$src/scripts/independent_cases_d.py" "$work/d" 1 4606 load-drift || exi
 python3 "$src/scripts/independent_cases_c.py" "$work/c" 1 2002 voltage-lonely_stroke || exit 1
 python3 "$src/scripts/independent_cases_d.py" "$work/d" 1 4700 voltage-lonely_stroke || exit 1
 python3 "$src/scripts/independent_cases.py" "$work/ar" 1 4803 voltage-none --ar-noise 0.7 || exit 1
+python3 "$src/scripts/independent_cases_d.py" "$work/d" 1 5002 load-outliers || exit 1
+python3 "$src/scripts/independent_cases_d.py" "$work/d" 1 5201 load-outliers || exit 1
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -298,5 +304,7 @@ expect "$work/ar/voltage-none-4803.csv" none
 expect "$work/e/voltage-drift-100.csv" drift
 expect "$work/e/voltage-drift-5002.csv" drift
 expect_not "$work/d/voltage-offset_nonlinearity-4102.csv" drift
+expect "$work/d/load-outliers-5002.csv" outliers
+expect "$work/d/load-outliers-5201.csv" outliers
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]

@@ -73,6 +73,8 @@ class ProtocolPoints {
     }
     return false;
   }
+  /// How many other readings share t's protocol point.
+  std::size_t others(std::size_t t) const { return points_.at(key_[t]).size() - 1; }
   /// The other reading at t's protocol point when there is exactly one; t otherwise.
   std::size_t twin(std::size_t t) const {
     const std::vector<std::size_t>& p = points_.at(key_[t]);
@@ -269,6 +271,75 @@ constexpr double kHold = 6.0;
 // steps, for the other tiers).
 constexpr double kRamp = 8.0;
 
+/// Bursts: one to kBurst consecutive readings off their protocol points together (a sensor
+/// glitch that lasts a few readings; the fourth independent generator's outliers). Each
+/// stands off its point's other readings (dev, in units of `scale`) by more than kAlone, the
+/// same way and within a factor two of the others in the run, and the readings just before
+/// and after the run are at their points (within kQuiet): a model's misfit, a drift or a
+/// lonely stroke moves a stretch of the record smoothly, never a few readings with both
+/// edges sharp. The neighbour statistic misses a burst (a reading of its middle stands level
+/// with its neighbours), and so do the ramp and protocol-point tiers that ask a reading to
+/// stand alone. No other reading at a run reading's point may share its deviation
+/// (ProtocolPoints::shared); where one pass only meets the run, the run may be in that pass
+/// (it mirrors the run in dev), and the rougher of the two holds the burst.
+/// Every reading read once per hold is judged, the first rise of a load test too: the
+/// comparison is on the readings themselves. Returns each run reading's smallest deviation in the
+/// run, in scales.
+constexpr std::size_t kBurst = 3;
+constexpr double kQuiet = 1.5;
+std::vector<double> burst_scores(const Record& rec, const std::vector<double>& dev, double scale,
+                                 const ProtocolPoints& alike) {
+  const std::vector<double>& y = rec.y;
+  const std::size_t n = dev.size();
+  std::vector<double> out(n, 0.0);
+  auto off = [&](std::size_t t) {
+    return !std::isnan(dev[t]) && std::abs(dev[t]) > kAlone * scale && !alike.shared(y, t);
+  };
+  auto quiet = [&](std::size_t t) {
+    return !std::isnan(dev[t]) && std::abs(dev[t]) <= kQuiet * scale;
+  };
+  // The readings' roughness over [a, b]: their distances from their neighbours' mean.
+  auto rough = [&](std::size_t a, std::size_t b) {
+    double sum = 0.0;
+    for (std::size_t t = std::max<std::size_t>(a, 1); t <= b && t + 1 < n; ++t)
+      sum += std::abs(y[t] - 0.5 * (y[t - 1] + y[t + 1]));
+    return sum;
+  };
+  for (std::size_t a = 1; a < n; ++a) {
+    if (!off(a) || !quiet(a - 1)) continue;
+    std::size_t b = a + 1;
+    double lo = std::abs(dev[a]), hi = lo;
+    while (b < n && b - a < kBurst + 1 && off(b) && dev[b] * dev[a] > 0.0) {
+      lo = std::min(lo, std::abs(dev[b]));
+      hi = std::max(hi, std::abs(dev[b]));
+      ++b;
+    }
+    if (b - a > kBurst || b >= n || !quiet(b) || lo < 0.5 * hi) continue;
+    // Readings with hold-mates are judged against them (hold_scores), which allows for creep
+    // moving a hold's first reading: here a rig non-congruence of 0.7 read three times per
+    // hold, the first reading of one hold 6.0 scales off the other passes', level with its
+    // mates, was named `outliers`.
+    bool held = false;
+    for (std::size_t t = a; t < b; ++t)
+      held = held || same_hold(rec, t - 1, t) || (t + 1 < n && same_hold(rec, t, t + 1));
+    if (held) continue;
+    // Met by one other pass only: the run and its edges there must be consecutive readings
+    // too, and the burst is the pass whose readings stand rougher off their neighbours (the
+    // other pass's run mirrors it in dev).
+    bool one_other = false;
+    for (std::size_t t = a - 1; t <= b; ++t) one_other = one_other || alike.others(t) == 1;
+    if (one_other) {
+      bool consecutive = true;
+      for (std::size_t t = a - 1; t < b; ++t)
+        consecutive = consecutive && alike.others(t) == 1 && alike.others(t + 1) == 1 &&
+                      alike.twin(t) + 1 == alike.twin(t + 1);
+      if (!consecutive || rough(a - 1, b) <= rough(alike.twin(a - 1), alike.twin(b))) continue;
+    }
+    for (std::size_t t = a; t < b; ++t) out[t] = lo / scale;
+  }
+  return out;
+}
+
 }  // namespace
 
 OutlierScreen screen_outliers(const Context& ctx) {
@@ -342,16 +413,17 @@ OutlierScreen screen_outliers(const Context& ctx) {
   const ProtocolPoints alike(rec, every, false);
   std::vector<double> dev(n, none);  // NaN: tests at several loads, or no other reading there
   for (std::size_t t = 0; t < n && !rec.several_loads; ++t) dev[t] = alike.deviation(rec.y, t);
-  const std::vector<double> off_alone = [&] {
-    std::vector<double> off(n, 0.0);
-    if (rec.several_loads) return off;
+  const double y_scale = [&] {
     std::vector<double> sq;
     for (double d : dev) {
       if (!std::isnan(d)) sq.push_back(d * d);
     }
-    if (sq.size() < 20) return off;
-    const double y_scale =
-        std::max({trimmed_sigma(sq, 5, 0.662), 0.5 * ctx.resolution, 1e-4 * rec.range});
+    if (sq.size() < 20) return none;
+    return std::max({trimmed_sigma(sq, 5, 0.662), 0.5 * ctx.resolution, 1e-4 * rec.range});
+  }();
+  const std::vector<double> off_alone = [&] {
+    std::vector<double> off(n, 0.0);
+    if (std::isnan(y_scale)) return off;
     for (std::size_t t : screened) {
       if (std::isnan(dev[t]) || std::abs(dev[t]) <= kAlone * y_scale || z[t] < kAside) continue;
       // Alone: the neighbours are where they are elsewhere (a drift or a changed loop moves
@@ -477,6 +549,26 @@ OutlierScreen screen_outliers(const Context& ctx) {
     ++confirmed;
     ++in_holds;
     repro_max = std::max(repro_max, off_hold[t]);
+  }
+  if (!std::isnan(y_scale)) {
+    // Its scale: the smaller of y_scale and the deviations' MAD, which a burst met by one
+    // other pass does not inflate (each of its readings puts two large deviations among a few
+    // dozen; measured: a fourth-generator record with two passes over 26 protocol points, a
+    // burst of three and a spike, 31 % of them large, y_scale twice the bursts' own).
+    std::vector<double> devs;
+    for (double d : dev) {
+      if (!std::isnan(d)) devs.push_back(d);
+    }
+    const double b_scale =
+        std::min(y_scale, std::max({mad(devs), 0.5 * ctx.resolution, 1e-4 * rec.range}));
+    const std::vector<double> off_burst = burst_scores(rec, dev, b_scale, alike);
+    for (std::size_t t = 0; t < n; ++t) {
+      if (flagged[t] || off_burst[t] <= 0.0) continue;
+      flagged[t] = 1;
+      ++count;
+      ++confirmed;
+      repro_max = std::max(repro_max, off_burst[t]);
+    }
   }
   for (std::size_t i = 0; i < screened.size(); ++i) {
     const std::size_t t = screened[i];
@@ -605,11 +697,12 @@ Finding detect_outliers(Context& ctx) {
   f.evidence = fmt::format(
       "{} reading(s) stand more than {:g} robust sigmas off their neighbours (largest {:.1f}), "
       "or more than {:g} off them and {:g} off the readings at the same point of the protocol "
-      "elsewhere, or {:g} off their hold-mates ({} such, {} of them in holds, largest {:.1f}); "
+      "elsewhere, or {:g} off their hold-mates, or in bursts of up to {} readings {:g} off the "
+      "readings at their points ({} such, {} of them in holds, largest {:.1f}); "
       "without them the held-out E_RMS on the other readings goes from {:.3f} to {:.3f} % of "
       "range (sign-flip p = {:.3f})",
-      count, kFlag, zmax, kCandidate, kRepro, kHold, confirmed, screen.in_holds, screen.repro_max,
-      f.heldout_rms_before, f.heldout_rms_after, gain_p);
+      count, kFlag, zmax, kCandidate, kRepro, kHold, kBurst, kAlone, confirmed, screen.in_holds,
+      screen.repro_max, f.heldout_rms_before, f.heldout_rms_after, gain_p);
   return f;
 }
 
