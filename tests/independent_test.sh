@@ -153,6 +153,9 @@
 # - a clean second-generator voltage record read four times per hold, holds jittered (seed
 #   5207), named `creep` by the hold-time test (p = 0.0009) while its readings during holds did
 #   not move (p = 0.86): that test is not run where readings are taken during holds (`none`).
+# - load-shape couplings of the fifth generator whose extension gains significantly but under
+#   5 % (seeds 5001 and 5101: 3.4 and 2.8 %, signatures at p = 0.001), `none` before the
+#   coupling could be named by its signature: `load_shape_coupling`.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -228,6 +231,10 @@ python3 "$src/scripts/independent_cases.py" "$work/ar" 1 4803 voltage-none --ar-
 python3 "$src/scripts/independent_cases_d.py" "$work/d" 1 5002 load-outliers || exit 1
 python3 "$src/scripts/independent_cases_d.py" "$work/d" 1 5201 load-outliers || exit 1
 python3 "$src/scripts/independent_cases_b.py" "$work/b" 1 5207 voltage-none || exit 1
+python3 "$src/scripts/independent_cases_e.py" "$work/e" 1 5001 voltage-load_shape_coupling ||
+  exit 1
+python3 "$src/scripts/independent_cases_e.py" "$work/e" 1 5101 voltage-load_shape_coupling ||
+  exit 1
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -311,5 +318,7 @@ expect_not "$work/d/voltage-offset_nonlinearity-4102.csv" drift
 expect "$work/d/load-outliers-5002.csv" outliers
 expect "$work/d/load-outliers-5201.csv" outliers
 expect "$work/b/voltage-none-5207.csv" none
+expect "$work/e/voltage-load_shape_coupling-5001.csv" load_shape_coupling
+expect "$work/e/voltage-load_shape_coupling-5101.csv" load_shape_coupling
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]

@@ -226,7 +226,7 @@ Finding not_tested(const Context& ctx, const std::string& effect, const std::str
 }
 
 Finding feature_finding(Context& ctx, const std::string& effect, const std::string& extension,
-                        const Features& features, const std::string& what) {
+                        const Features& features, const std::string& what, Signature* signature) {
   const Record& rec = ctx.rec;
   Finding f;
   f.effect = effect;
@@ -247,6 +247,18 @@ Finding feature_finding(Context& ctx, const std::string& effect, const std::stri
   const std::size_t block = std::max<std::size_t>(4, ctx.scored.size() / 24);
   const double p_signature =
       block_permutation_p(rs, Xs, f.score, block, ctx.opt.permutations, ctx.rng);
+  if (signature) {
+    signature->available = true;
+    signature->what = what;
+    signature->estimate = f.score;
+    signature->units = static_cast<int>(rs.size() / static_cast<Eigen::Index>(block));
+    signature->p_value = p_signature;
+    if (p_signature * (ctx.opt.permutations + 1) < 1.5) {
+      std::mt19937_64 own(ctx.opt.seed + 29);
+      signature->p_value =
+          block_permutation_p(rs, Xs, f.score, block, 10 * ctx.opt.permutations, own);
+    }
+  }
   // The extension, fitted on each fold's training rows.
   std::vector<double> after(ctx.oof);
   for (int k = 0; k < rec.folds; ++k) {

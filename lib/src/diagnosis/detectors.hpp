@@ -45,7 +45,8 @@ struct Context {
   ReturnPointSignatures return_point;  ///< model-free (signatures.hpp)
   Signature congruency, holds;
   Signature congruency_robust;  ///< the same, blind to single readings off their neighbours
-  Signature dwell;  ///< creep with one reading per hold: residuals against the hold times
+  Signature dwell;     ///< creep with one reading per hold: residuals against the hold times
+  Signature coupling;  ///< the loop shape changing with the load (detect_load_shape_coupling)
   /// Creep with readings during holds named by the Kelvin element's held-out gain while the
   /// readings during holds do not move at alpha (detect_creep): known by a gain only, it
   /// competes by gain and yields to a drift seen in time (diagnose.cpp).
@@ -74,9 +75,13 @@ Score score(Context& ctx, const std::vector<double>& after, const std::vector<ch
 using Features = std::function<Eigen::MatrixXd(const FoldFit&)>;
 
 /// An effect seen as a residual signature X: block-permutation test of R^2(r ~ X), and the
-/// two-stage extension y = baseline + X beta (beta on each fold's training rows).
+/// two-stage extension y = baseline + X beta (beta on each fold's training rows). With
+/// `signature`, that test is stored there too, resolved with ten times the permutations (on a
+/// stream of its own) where the usual count leaves p at its least value, so that it can be
+/// held to alpha / 10 (diagnose.cpp names some effects by their signature alone).
 Finding feature_finding(Context& ctx, const std::string& effect, const std::string& extension,
-                        const Features& features, const std::string& what);
+                        const Features& features, const std::string& what,
+                        Signature* signature = nullptr);
 
 /// An effect whose extension is another model: `fit(train)` predicts every row.
 Finding model_finding(Context& ctx, const std::string& effect, const std::string& extension,

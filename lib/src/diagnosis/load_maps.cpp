@@ -146,7 +146,7 @@ Finding detect_load_shape_coupling(Context& ctx) {
         centre_per_segment(rec, X);
         return X;
       },
-      "a change of the normalised loop shape with load");
+      "a change of the normalised loop shape with load", &ctx.coupling);
 }
 
 Finding detect_offset_nonlinearity(Context& ctx) {
