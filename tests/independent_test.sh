@@ -156,6 +156,15 @@
 # - load-shape couplings of the fifth generator whose extension gains significantly but under
 #   5 % (seeds 5001 and 5101: 3.4 and 2.8 %, signatures at p = 0.001), `none` before the
 #   coupling could be named by its signature: `load_shape_coupling`.
+# - moving-Preisach non-congruence (session 51): the first generator's seed 5102 (a = 0.3 of the
+#   load span per output range) and the fourth's seed 5600, `none` before the moving model
+#   joined the output map as a second extension: `minor_loop_noncongruence`. And the clean load
+#   records where its first versions named the effect: seed 5402 of the fifth generator (the
+#   moving model gaining 18.6 % on held-out readings its training had not identified) and
+#   seed 5408 of the first (0.04 mm step over 0.005 mm noise): `none`.
+# - a clean fourth-generator voltage record (fresh seed 5600, 0.002 mm noise) named
+#   `load_shape_coupling` by its signature with the extension's gain at p = 0.033, before that
+#   route asked for the gain at alpha: `none`.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -235,6 +244,13 @@ python3 "$src/scripts/independent_cases_e.py" "$work/e" 1 5001 voltage-load_shap
   exit 1
 python3 "$src/scripts/independent_cases_e.py" "$work/e" 1 5101 voltage-load_shape_coupling ||
   exit 1
+python3 "$src/scripts/independent_cases.py" "$work/a" 1 5102 load-minor_loop_noncongruence ||
+  exit 1
+python3 "$src/scripts/independent_cases_d.py" "$work/d" 1 5600 load-minor_loop_noncongruence ||
+  exit 1
+python3 "$src/scripts/independent_cases_e.py" "$work/e" 1 5402 load-none || exit 1
+python3 "$src/scripts/independent_cases.py" "$work/a" 1 5408 load-none || exit 1
+python3 "$src/scripts/independent_cases_d.py" "$work/d" 1 5600 voltage-none || exit 1
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -320,5 +336,10 @@ expect "$work/d/load-outliers-5201.csv" outliers
 expect "$work/b/voltage-none-5207.csv" none
 expect "$work/e/voltage-load_shape_coupling-5001.csv" load_shape_coupling
 expect "$work/e/voltage-load_shape_coupling-5101.csv" load_shape_coupling
+expect "$work/a/load-minor_loop_noncongruence-5102.csv" minor_loop_noncongruence
+expect "$work/d/load-minor_loop_noncongruence-5600.csv" minor_loop_noncongruence
+expect "$work/e/load-none-5402.csv" none
+expect "$work/a/load-none-5408.csv" none
+expect "$work/d/voltage-none-5600.csv" none
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]

@@ -96,6 +96,12 @@ class Baseline {
     OutputFilter filter;                     ///< y = L[model] (creep)
     const std::vector<double>* y = nullptr;  ///< fit this response instead of the record's
     bool quick = false;                      ///< one grid instead of the shifted-grid average
+    /// Load tests: the moving model y = Gamma[u + moving * y] (PHYSICS.md section 5), 0 = off.
+    /// Identified on the effective input u + moving * y with the measured y on training rows
+    /// and `fill` (a prediction made without the other rows, e.g. the baseline's) elsewhere;
+    /// predicted by solving y = Gamma[u + moving * y] reading by reading, from the model alone.
+    double moving = 0.0;
+    const std::vector<double>* fill = nullptr;
   };
   /// The model fitted on the rows where train != 0, predicting every row.
   FoldFit fit(const std::vector<char>& train, const Variant& variant) const;
@@ -104,6 +110,8 @@ class Baseline {
   std::string name() const;
 
  private:
+  std::vector<double> fit_moving(const std::vector<char>& train, const Variant& variant,
+                                 PreisachFitOptions o) const;
   const Record& rec_;
   PreisachFitOptions options_;
 };

@@ -67,6 +67,7 @@ Score score(Context& ctx, const std::vector<double>& after, const std::vector<ch
   }
   if (count == 0) return s;
   const double before = std::sqrt(ss_before / static_cast<double>(count));
+  s.rms_before = 100.0 * before / ctx.rec.range;
   s.rms_after = 100.0 * std::sqrt(ss_after / static_cast<double>(count)) / ctx.rec.range;
   s.gain_pct = before > 0.0 ? 100.0 * (1.0 - std::sqrt(ss_after / ss_before)) : 0.0;
   s.p_value = sign_flip_p(gains, ctx.opt.permutations, ctx.rng);
@@ -311,7 +312,7 @@ Finding feature_finding(Context& ctx, const std::string& effect, const std::stri
 
 Finding model_finding(Context& ctx, const std::string& effect, const std::string& extension,
                       const std::function<std::vector<double>(int fold)>& fold_prediction,
-                      const std::string& what) {
+                      const std::string& what, const std::vector<char>& use) {
   const Record& rec = ctx.rec;
   Finding f;
   f.effect = effect;
@@ -323,14 +324,20 @@ Finding model_finding(Context& ctx, const std::string& effect, const std::string
       if (predicted_by(rec, t, k)) after[t] = p[t];
     }
   }
-  const Score s = score(ctx, after);
+  const Score s = score(ctx, after, use);
   f.heldout_prediction = std::move(after);
   record(f, ctx, s, s.p_value);
   f.score = f.gain_pct;
+  std::string on;
+  if (!use.empty()) {
+    f.heldout_rms_before = s.rms_before;
+    on = fmt::format(" on the {} held-out readings whose memory their training identified",
+                     std::count_if(use.begin(), use.end(), [](char c) { return c != 0; }));
+  }
   f.evidence = fmt::format(
-      "{}: held-out E_RMS from {:.3f} to {:.3f} % of range (sign-flip p = {:.3f} over {} "
+      "{}: held-out E_RMS{} from {:.3f} to {:.3f} % of range (sign-flip p = {:.3f} over {} "
       "blocks)",
-      what, f.heldout_rms_before, f.heldout_rms_after, s.p_value, ctx.blocks.size());
+      what, on, f.heldout_rms_before, f.heldout_rms_after, s.p_value, ctx.blocks.size());
   return f;
 }
 

@@ -61,10 +61,15 @@ struct Context {
   std::vector<char> train_mask(int fold) const;
 };
 
+/// Fewer held-out readings than this whose memory their training identified cannot show
+/// structure beside the baseline's gaps.
+constexpr std::size_t kMinIdentified = 10;
+
 /// Held-out comparison of an extension's out-of-fold prediction with the baseline's, on the
 /// scored rows that `use` admits (all when empty): E_RMS after (% of range), the gain, and the
 /// sign-flip p-value of the per-block gains.
 struct Score {
+  double rms_before = 0.0;  ///< the baseline's, on the rows scored (% of range)
   double rms_after = 0.0;
   double gain_pct = 0.0;
   double p_value = 1.0;
@@ -83,10 +88,11 @@ Finding feature_finding(Context& ctx, const std::string& effect, const std::stri
                         const Features& features, const std::string& what,
                         Signature* signature = nullptr);
 
-/// An effect whose extension is another model: `fit(train)` predicts every row.
+/// An effect whose extension is another model: `fit(train)` predicts every row. Scored on the
+/// held-out rows, or on those of them where `use` is non-zero when it is given.
 Finding model_finding(Context& ctx, const std::string& effect, const std::string& extension,
                       const std::function<std::vector<double>(int fold)>& fold_prediction,
-                      const std::string& what);
+                      const std::string& what, const std::vector<char>& use = {});
 
 Finding not_tested(const Context& ctx, const std::string& effect, const std::string& why);
 
