@@ -485,6 +485,22 @@ testing::Scenario protocol_scenario(const std::vector<double>& loads, int index,
   return s;
 }
 
+// A record of protocol_scenario, its options seeded from the scenario, checked `none` as
+// generated (before a test adds its effect); `context` goes into the failure message.
+struct ProtocolRecord {
+  testing::Scenario scenario;
+  DiagnoseData data;
+  DiagnoseOptions options;
+};
+ProtocolRecord clean_protocol_record(const std::vector<double>& loads, int index, double noise,
+                                     const std::string& context) {
+  ProtocolRecord r{protocol_scenario(loads, index, noise), {}, {}};
+  r.data = testing::scenario_data(r.scenario);
+  r.options.seed = r.scenario.spec.seed;
+  EXPECT_EQ(diagnose(r.data, r.options).cause, "none") << r.scenario.describe() << context;
+  return r;
+}
+
 // Spikes on the last rise of a protocol whose only repeated rise is the first: cycles from 0 g
 // to ever lower tops on step grids of their own (nothing else meets the same memory state),
 // then the first cycle again. At 0 g every hysteron is off, so the last rise repeats the first
@@ -506,13 +522,9 @@ TEST(Diagnose, SpikesOnTheLastRiseAreComparedWithTheFirst) {
   const std::size_t last_rise = loads.size() - 16;  // the last cycle's first reading above 20 g
   for (int index = 0; index < 3; ++index) {
     for (const double noise : {0.005, 0.01}) {
-      const testing::Scenario s = protocol_scenario(loads, index, noise);
-      DiagnoseData data = testing::scenario_data(s);
+      auto [s, data, o] =
+          clean_protocol_record(loads, index, noise, " noise " + std::to_string(noise));
       ASSERT_EQ(data.input.size(), loads.size()) << s.describe();
-      DiagnoseOptions o;
-      o.seed = s.spec.seed;
-      const Diagnosis clean = diagnose(data, o);
-      EXPECT_EQ(clean.cause, "none") << s.describe() << " noise " << noise;
       const auto [lo, hi] = std::minmax_element(data.output.begin(), data.output.end());
       const double spike = 0.05 * (*hi - *lo);
       data.output[last_rise + 1 + static_cast<std::size_t>(index)] += spike;
@@ -542,13 +554,9 @@ TEST(Diagnose, BurstsOfReadingsAreNamed) {
     }
     loads.push_back(0.0);
     for (int index = 0; index < 4; ++index) {
-      const testing::Scenario s = protocol_scenario(loads, index, index % 2 == 0 ? 0.005 : 0.01);
-      DiagnoseData data = testing::scenario_data(s);
+      auto [s, data, o] = clean_protocol_record(loads, index, index % 2 == 0 ? 0.005 : 0.01,
+                                                " passes " + std::to_string(passes));
       ASSERT_EQ(data.input.size(), loads.size()) << s.describe();
-      DiagnoseOptions o;
-      o.seed = s.spec.seed;
-      const Diagnosis clean = diagnose(data, o);
-      EXPECT_EQ(clean.cause, "none") << s.describe() << " passes " << passes;
       const auto [lo, hi] = std::minmax_element(data.output.begin(), data.output.end());
       const double size = (index < 2 ? 0.06 : 0.09) * (*hi - *lo) * (index % 2 == 0 ? 1 : -1);
       const std::size_t length = 1 + static_cast<std::size_t>(index) % 3;

@@ -171,86 +171,79 @@ bin=$1
 src=$2
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-python3 "$src/scripts/independent_cases.py" "$work/clean" 4 200 || exit 1
-python3 "$src/scripts/independent_cases.py" "$work/fresh" 4 600 || exit 1
-python3 "$src/scripts/independent_cases.py" "$work/fresh" 4 700 || exit 1
-python3 "$src/scripts/independent_cases.py" "$work/fresh" 4 800 || exit 1
-python3 "$src/scripts/independent_cases.py" "$work/clean" 1 1079 load-none || exit 1
-python3 "$src/scripts/independent_cases.py" "$work/clean" 1 1098 load-none || exit 1
-python3 "$src/scripts/independent_cases.py" "$work/clean" 1 900 load-none || exit 1
-python3 "$src/scripts/independent_cases.py" "$work/fresh" 1 1101 load-creep || exit 1
-python3 "$src/scripts/independent_cases.py" "$work/fresh" 1 1203 voltage-lonely_stroke || exit 1
-python3 "$src/scripts/independent_cases.py" "$work/fresh" 1 3107 voltage-creep --once-per-hold ||
-  exit 1
-python3 "$src/scripts/independent_cases.py" "$work/fresh" 1 7002 load-outliers || exit 1
-python3 "$src/scripts/independent_cases.py" "$work/fresh" 1 7027 load-outliers || exit 1
-python3 "$src/scripts/independent_cases.py" "$work/clean" 1 1126 load-none || exit 1
-python3 "$src/scripts/independent_cases.py" "$work/fresh" 1 1403 load-minor_loop_noncongruence ||
-  exit 1
-python3 "$src/scripts/independent_cases.py" "$work/fresh" 1 1703 voltage-lonely_stroke || exit 1
-python3 "$src/scripts/independent_cases.py" "$work/one" 1 1903 voltage-lonely_stroke --one-load ||
-  exit 1
-python3 "$src/scripts/independent_cases.py" "$work/one" 1 1908 voltage-lonely_stroke --one-load ||
-  exit 1
-python3 "$src/scripts/independent_cases.py" "$work/clean" 1 3000 voltage-none || exit 1
-python3 "$src/scripts/independent_cases_b.py" "$work/b" 1 300 voltage-offset_nonlinearity ||
-  exit 1
-python3 "$src/scripts/independent_cases_b.py" "$work/b" 1 6035 voltage-drift || exit 1
-python3 "$src/scripts/independent_cases_b.py" "$work/b" 1 403 voltage-offset_nonlinearity ||
-  exit 1
-python3 "$src/scripts/independent_cases.py" "$work/fresh" 2 3801 load-outliers || exit 1
-python3 "$src/scripts/independent_cases_c.py" "$work/c" 2 102 load-none || exit 1
-python3 "$src/scripts/independent_cases_c.py" "$work/c" 1 203 load-creep || exit 1
-python3 "$src/scripts/independent_cases_c.py" "$work/c" 2 301 load-outliers || exit 1
-python3 "$src/scripts/independent_cases_c.py" "$work/c" 1 607 voltage-lonely_stroke || exit 1
-python3 "$src/scripts/independent_cases_c.py" "$work/c" 1 1001 voltage-lonely_stroke || exit 1
-python3 "$src/scripts/independent_cases_c.py" "$work/c" 1 1500 voltage-none || exit 1
-python3 "$src/scripts/independent_cases_c.py" "$work/c" 1 3049 voltage-none || exit 1
-python3 "$src/scripts/independent_cases_c.py" "$work/c" 1 3048 voltage-none || exit 1
-python3 "$src/scripts/independent_cases_b.py" "$work/b" 1 1500 voltage-none || exit 1
-python3 "$src/scripts/independent_cases_c.py" "$work/c" 2 703 voltage-creep || exit 1
-python3 "$src/scripts/independent_cases_b.py" "$work/b" 1 2003 voltage-drift || exit 1
-python3 "$src/scripts/independent_cases_c.py" "$work/c" 1 1700 voltage-creep || exit 1
-python3 "$src/scripts/independent_cases_b.py" "$work/b" 1 2603 load-creep || exit 1
-python3 "$src/scripts/independent_cases_b.py" "$work/b" 1 3425 load-none || exit 1
-python3 "$src/scripts/independent_cases_b.py" "$work/b" 1 2600 voltage-offset_nonlinearity ||
-  exit 1
-python3 "$src/scripts/independent_cases_c.py" "$work/c" 1 6020 load-drift || exit 1
-python3 "$src/scripts/independent_cases_c.py" "$work/c" 1 6009 load-drift || exit 1
-python3 "$src/scripts/independent_cases_c.py" "$work/c" 1 6030 load-drift || exit 1
-python3 "$src/scripts/independent_cases_d.py" "$work/d" 1 5006 voltage-none || exit 1
-python3 "$src/scripts/independent_cases_d.py" "$work/d" 1 5013 voltage-none || exit 1
-python3 "$src/scripts/independent_cases_d.py" "$work/d" 1 4102 voltage-load_shape_coupling ||
-  exit 1
-python3 "$src/scripts/independent_cases_d.py" "$work/d" 1 6116 voltage-none || exit 1
-python3 "$src/scripts/independent_cases_e.py" "$work/e" 1 100 voltage-drift || exit 1
-python3 "$src/scripts/independent_cases_e.py" "$work/e" 1 5002 voltage-drift || exit 1
-python3 "$src/scripts/independent_cases_d.py" "$work/d" 1 4102 voltage-offset_nonlinearity ||
-  exit 1
-python3 "$src/scripts/independent_cases_c.py" "$work/c" 1 2001 voltage-offset_nonlinearity ||
-  exit 1
-python3 "$src/scripts/independent_cases_b.py" "$work/b" 1 6117 voltage-offset_nonlinearity ||
-  exit 1
-python3 "$src/scripts/independent_cases_c.py" "$work/c" 1 6143 voltage-none || exit 1
-python3 "$src/scripts/independent_cases_d.py" "$work/d" 1 4102 load-drift || exit 1
-python3 "$src/scripts/independent_cases_d.py" "$work/d" 1 4606 load-drift || exit 1
-python3 "$src/scripts/independent_cases_c.py" "$work/c" 1 2002 voltage-lonely_stroke || exit 1
-python3 "$src/scripts/independent_cases_d.py" "$work/d" 1 4700 voltage-lonely_stroke || exit 1
-python3 "$src/scripts/independent_cases.py" "$work/ar" 1 4803 voltage-none --ar-noise 0.7 || exit 1
-python3 "$src/scripts/independent_cases_d.py" "$work/d" 1 5002 load-outliers || exit 1
-python3 "$src/scripts/independent_cases_d.py" "$work/d" 1 5201 load-outliers || exit 1
-python3 "$src/scripts/independent_cases_b.py" "$work/b" 1 5207 voltage-none || exit 1
-python3 "$src/scripts/independent_cases_e.py" "$work/e" 1 5001 voltage-load_shape_coupling ||
-  exit 1
-python3 "$src/scripts/independent_cases_e.py" "$work/e" 1 5101 voltage-load_shape_coupling ||
-  exit 1
-python3 "$src/scripts/independent_cases.py" "$work/a" 1 5102 load-minor_loop_noncongruence ||
-  exit 1
-python3 "$src/scripts/independent_cases_d.py" "$work/d" 1 5600 load-minor_loop_noncongruence ||
-  exit 1
-python3 "$src/scripts/independent_cases_e.py" "$work/e" 1 5402 load-none || exit 1
-python3 "$src/scripts/independent_cases.py" "$work/a" 1 5408 load-none || exit 1
-python3 "$src/scripts/independent_cases_d.py" "$work/d" 1 5600 voltage-none || exit 1
+# make_cases GENERATOR DIR N SEED [CASE] [OPTIONS]: N records per case from seed SEED of the
+# generator a-e (scripts/independent_cases.py, scripts/independent_cases_b.py to _e.py) into
+# $work/DIR.
+make_cases() {
+  local script="$src/scripts/independent_cases_$1.py"
+  [ "$1" = a ] && script="$src/scripts/independent_cases.py"
+  python3 "$script" "$work/$2" "${@:3}" || exit 1
+}
+make_cases a clean 4 200
+make_cases a fresh 4 600
+make_cases a fresh 4 700
+make_cases a fresh 4 800
+make_cases a clean 1 1079 load-none
+make_cases a clean 1 1098 load-none
+make_cases a clean 1 900 load-none
+make_cases a fresh 1 1101 load-creep
+make_cases a fresh 1 1203 voltage-lonely_stroke
+make_cases a fresh 1 3107 voltage-creep --once-per-hold
+make_cases a fresh 1 7002 load-outliers
+make_cases a fresh 1 7027 load-outliers
+make_cases a clean 1 1126 load-none
+make_cases a fresh 1 1403 load-minor_loop_noncongruence
+make_cases a fresh 1 1703 voltage-lonely_stroke
+make_cases a one 1 1903 voltage-lonely_stroke --one-load
+make_cases a one 1 1908 voltage-lonely_stroke --one-load
+make_cases a clean 1 3000 voltage-none
+make_cases b b 1 300 voltage-offset_nonlinearity
+make_cases b b 1 6035 voltage-drift
+make_cases b b 1 403 voltage-offset_nonlinearity
+make_cases a fresh 2 3801 load-outliers
+make_cases c c 2 102 load-none
+make_cases c c 1 203 load-creep
+make_cases c c 2 301 load-outliers
+make_cases c c 1 607 voltage-lonely_stroke
+make_cases c c 1 1001 voltage-lonely_stroke
+make_cases c c 1 1500 voltage-none
+make_cases c c 1 3049 voltage-none
+make_cases c c 1 3048 voltage-none
+make_cases b b 1 1500 voltage-none
+make_cases c c 2 703 voltage-creep
+make_cases b b 1 2003 voltage-drift
+make_cases c c 1 1700 voltage-creep
+make_cases b b 1 2603 load-creep
+make_cases b b 1 3425 load-none
+make_cases b b 1 2600 voltage-offset_nonlinearity
+make_cases c c 1 6020 load-drift
+make_cases c c 1 6009 load-drift
+make_cases c c 1 6030 load-drift
+make_cases d d 1 5006 voltage-none
+make_cases d d 1 5013 voltage-none
+make_cases d d 1 4102 voltage-load_shape_coupling
+make_cases d d 1 6116 voltage-none
+make_cases e e 1 100 voltage-drift
+make_cases e e 1 5002 voltage-drift
+make_cases d d 1 4102 voltage-offset_nonlinearity
+make_cases c c 1 2001 voltage-offset_nonlinearity
+make_cases b b 1 6117 voltage-offset_nonlinearity
+make_cases c c 1 6143 voltage-none
+make_cases d d 1 4102 load-drift
+make_cases d d 1 4606 load-drift
+make_cases c c 1 2002 voltage-lonely_stroke
+make_cases d d 1 4700 voltage-lonely_stroke
+make_cases a ar 1 4803 voltage-none --ar-noise 0.7
+make_cases d d 1 5002 load-outliers
+make_cases d d 1 5201 load-outliers
+make_cases b b 1 5207 voltage-none
+make_cases e e 1 5001 voltage-load_shape_coupling
+make_cases e e 1 5101 voltage-load_shape_coupling
+make_cases a a 1 5102 load-minor_loop_noncongruence
+make_cases d d 1 5600 load-minor_loop_noncongruence
+make_cases e e 1 5402 load-none
+make_cases a a 1 5408 load-none
+make_cases d d 1 5600 voltage-none
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE

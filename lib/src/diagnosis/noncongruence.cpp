@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "detectors.hpp"
 
@@ -71,6 +72,10 @@ Finding detect_noncongruence(Context& ctx) {
   // identified, the moving model gaining 18.6 % at p = 0.001 on all of them).
   const std::size_t identified =
       static_cast<std::size_t>(std::count(ctx.identified.begin(), ctx.identified.end(), 1));
+  // Each fold's quick refit at c = 0, the yardstick both families' candidates are chosen
+  // against, computed once per fold (NaN until then).
+  std::vector<double> quick_baseline_sse(ctx.by_fold.size(),
+                                         std::numeric_limits<double>::quiet_NaN());
   auto family = [&](bool map) {
     std::string chosen;
     Finding f = model_finding(
@@ -83,7 +88,10 @@ Finding detect_noncongruence(Context& ctx) {
           const std::vector<char> train = ctx.train_mask(fold);
           const FoldFit& base = ctx.by_fold[static_cast<std::size_t>(fold)];
           // Every candidate, 0 too, on one grid: chosen like for like, then refitted.
-          double best = training_sse(rec.y, predict(train, 0.0, true), train);
+          double& yardstick = quick_baseline_sse[static_cast<std::size_t>(fold)];
+          if (std::isnan(yardstick))
+            yardstick = training_sse(rec.y, predict(train, 0.0, true), train);
+          double best = yardstick;
           double best_k = 0.0;
           for (double k : map ? std::vector<double>{-0.45, -0.3, -0.2, -0.1, 0.1, 0.2, 0.3, 0.45}
                               : std::vector<double>{-0.3, -0.2, -0.1, 0.1, 0.2, 0.3}) {
