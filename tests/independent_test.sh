@@ -165,6 +165,12 @@
 # - a clean fourth-generator voltage record (fresh seed 5600, 0.002 mm noise) named
 #   `load_shape_coupling` by its signature with the extension's gain at p = 0.033, before that
 #   route asked for the gain at alpha: `none`.
+# - creep's Kelvin element scored also on the held-out readings whose memory their training
+#   identified (session 52): fourth-generator load creeps of seeds 5000 and 5101, gaining -9.0
+#   and 16.7 % on every held-out reading and 75.2 and 33.7 % on those: `creep` (`none`
+#   before); and a clean third-generator load record of random turning points (seed 5359)
+#   whose element gained 14.8 % at p = 0.007 on every reading and 5.5 % on its 37 identified
+#   ones: `none` (`creep` before).
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -244,6 +250,9 @@ make_cases d d 1 5600 load-minor_loop_noncongruence
 make_cases e e 1 5402 load-none
 make_cases a a 1 5408 load-none
 make_cases d d 1 5600 voltage-none
+make_cases c c 1 5359 load-none
+make_cases d d 1 5000 load-creep
+make_cases d d 1 5101 load-creep
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -334,5 +343,8 @@ expect "$work/d/load-minor_loop_noncongruence-5600.csv" minor_loop_noncongruence
 expect "$work/e/load-none-5402.csv" none
 expect "$work/a/load-none-5408.csv" none
 expect "$work/d/voltage-none-5600.csv" none
+expect "$work/c/load-none-5359.csv" none
+expect "$work/d/load-creep-5000.csv" creep
+expect "$work/d/load-creep-5101.csv" creep
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]

@@ -48,7 +48,8 @@ bool predicted_by(const Record& rec, std::size_t t, int k) {
 
 }  // namespace
 
-Score score(Context& ctx, const std::vector<double>& after, const std::vector<char>& use) {
+Score score(Context& ctx, const std::vector<double>& after, const std::vector<char>& use,
+            std::mt19937_64* rng) {
   Score s;
   double ss_before = 0.0, ss_after = 0.0;
   std::size_t count = 0;
@@ -70,7 +71,7 @@ Score score(Context& ctx, const std::vector<double>& after, const std::vector<ch
   s.rms_before = 100.0 * before / ctx.rec.range;
   s.rms_after = 100.0 * std::sqrt(ss_after / static_cast<double>(count)) / ctx.rec.range;
   s.gain_pct = before > 0.0 ? 100.0 * (1.0 - std::sqrt(ss_after / ss_before)) : 0.0;
-  s.p_value = sign_flip_p(gains, ctx.opt.permutations, ctx.rng);
+  s.p_value = sign_flip_p(gains, ctx.opt.permutations, rng ? *rng : ctx.rng);
   return s;
 }
 
@@ -330,6 +331,7 @@ Finding model_finding(Context& ctx, const std::string& effect, const std::string
   f.score = f.gain_pct;
   std::string on;
   if (!use.empty()) {
+    f.on_identified = true;
     f.heldout_rms_before = s.rms_before;
     on = fmt::format(" on the {} held-out readings whose memory their training identified",
                      std::count_if(use.begin(), use.end(), [](char c) { return c != 0; }));

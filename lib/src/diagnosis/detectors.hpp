@@ -67,14 +67,15 @@ constexpr std::size_t kMinIdentified = 10;
 
 /// Held-out comparison of an extension's out-of-fold prediction with the baseline's, on the
 /// scored rows that `use` admits (all when empty): E_RMS after (% of range), the gain, and the
-/// sign-flip p-value of the per-block gains.
+/// sign-flip p-value of the per-block gains (drawn from `rng`, the context's stream when null).
 struct Score {
   double rms_before = 0.0;  ///< the baseline's, on the rows scored (% of range)
   double rms_after = 0.0;
   double gain_pct = 0.0;
   double p_value = 1.0;
 };
-Score score(Context& ctx, const std::vector<double>& after, const std::vector<char>& use = {});
+Score score(Context& ctx, const std::vector<double>& after, const std::vector<char>& use = {},
+            std::mt19937_64* rng = nullptr);
 
 /// Features of an effect, one row per reading, computed from one fold's baseline fit.
 using Features = std::function<Eigen::MatrixXd(const FoldFit&)>;

@@ -46,6 +46,9 @@ struct Finding {
   double heldout_rms_before = 0.0;  ///< % of output range
   double heldout_rms_after = 0.0;
   double gain_pct = 0.0;  ///< 100 (1 - after / before)
+  /// Scored on the held-out readings whose memory their training identified only (the
+  /// before and after E_RMS and the gain are theirs), not on every held-out reading.
+  bool on_identified = false;
   /// The extended model's prediction of each reading, out of fold where held out, in sample
   /// (the first fold's fit) where never held out, the baseline's elsewhere; empty when no
   /// extension was fitted.
