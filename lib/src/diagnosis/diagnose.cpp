@@ -335,8 +335,9 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   // Gains compared like for like: where a detected finding was scored on the held-out readings
   // whose memory their training identified (the moving Preisach model, creep's Kelvin element),
   // the others' gains are taken on those readings too, not on every held-out reading (session
-  // 52: a fifth-generator load creep, fresh seed 5601, its element gaining 50.6 % there, was
-  // otherwise weighed against a trend gaining 60.5 % on every reading).
+  // 52: a second-generator load drift, fresh seed 5101, was named `creep` by an element gaining
+  // 23.0 % on its 69 identified readings, -2.4 % on all, against a trend gaining 19.5 % on
+  // all, which gains more on the identified ones).
   const bool like_for_like =
       std::any_of(d.findings.begin(), d.findings.end(),
                   [](const Finding& f) { return f.detected && f.on_identified; });
