@@ -278,9 +278,18 @@ Finding kelvin_creep(Context& ctx) {
   // reading and 5.5 % on its 37 identified ones, named `creep` before. Over 425 load records of
   // five generators 312 -> 318 right, the rig's 72 load records as before.
   // The p-value there is drawn on a stream of its own, so the other tests draw as before.
-  const auto identified =
-      static_cast<std::size_t>(std::count(ctx.identified.begin(), ctx.identified.end(), 1));
-  if (identified >= kMinIdentified) {
+  // Only where some scored readings are not identified: where all are, it is the same test
+  // drawn again, a second chance at alpha (measured: a third-generator voltage lonely stroke,
+  // seed 2002, all 202 scored readings identified, the element at p = 0.010 and again at
+  // p = 0.006, named `creep`).
+  std::size_t scored = 0, identified = 0;
+  for (const auto& block : ctx.blocks) {
+    for (std::size_t t : block) {
+      ++scored;
+      identified += ctx.identified[t] ? 1 : 0;
+    }
+  }
+  if (identified >= kMinIdentified && identified < scored) {
     std::mt19937_64 own(ctx.opt.seed + 31);
     const Score s = score(ctx, f.heldout_prediction, ctx.identified, &own);
     f.evidence += fmt::format(
