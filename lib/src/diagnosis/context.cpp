@@ -3,6 +3,7 @@
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 #include <utility>
 
 #include "detectors.hpp"
@@ -48,12 +49,22 @@ bool predicted_by(const Record& rec, std::size_t t, int k) {
 
 }  // namespace
 
-Score score(Context& ctx, const std::vector<double>& after, const std::vector<char>& use,
-            std::mt19937_64* rng) {
+std::vector<std::size_t> identified_scored(const Context& ctx) {
+  std::vector<std::size_t> rows;
+  for (std::size_t t : ctx.scored) {
+    if (ctx.identified[t]) rows.push_back(t);
+  }
+  return rows;
+}
+
+std::string on_identified_readings(std::size_t count) {
+  return fmt::format("on the {} held-out readings whose memory their training identified", count);
+}
+
+Score heldout_gain(const Context& ctx, const std::vector<double>& after,
+                   const std::vector<char>& use, std::vector<double>* block_gains) {
   Score s;
   double ss_before = 0.0, ss_after = 0.0;
-  std::size_t count = 0;
-  std::vector<double> gains;
   for (const auto& block : ctx.blocks) {
     double g = 0.0;
     for (std::size_t t : block) {
@@ -62,15 +73,23 @@ Score score(Context& ctx, const std::vector<double>& after, const std::vector<ch
       ss_before += ctx.r[t] * ctx.r[t];
       ss_after += e * e;
       g += ctx.r[t] * ctx.r[t] - e * e;
-      ++count;
+      ++s.count;
     }
-    gains.push_back(g);
+    if (block_gains) block_gains->push_back(g);
   }
-  if (count == 0) return s;
-  const double before = std::sqrt(ss_before / static_cast<double>(count));
+  if (s.count == 0) return s;
+  const double before = std::sqrt(ss_before / static_cast<double>(s.count));
   s.rms_before = 100.0 * before / ctx.rec.range;
-  s.rms_after = 100.0 * std::sqrt(ss_after / static_cast<double>(count)) / ctx.rec.range;
+  s.rms_after = 100.0 * std::sqrt(ss_after / static_cast<double>(s.count)) / ctx.rec.range;
   s.gain_pct = before > 0.0 ? 100.0 * (1.0 - std::sqrt(ss_after / ss_before)) : 0.0;
+  return s;
+}
+
+Score score(Context& ctx, const std::vector<double>& after, const std::vector<char>& use,
+            std::mt19937_64* rng) {
+  std::vector<double> gains;
+  Score s = heldout_gain(ctx, after, use, &gains);
+  if (s.count == 0) return s;
   s.p_value = sign_flip_p(gains, ctx.opt.permutations, rng ? *rng : ctx.rng);
   return s;
 }
@@ -311,6 +330,51 @@ Finding feature_finding(Context& ctx, const std::string& effect, const std::stri
   return f;
 }
 
+std::vector<double> fit_with_regressor(const Context& ctx, const std::vector<char>& train,
+                                       const std::function<double(std::size_t)>& g, double& beta) {
+  const Record& rec = ctx.rec;
+  // (c, beta) on the training rows of y - prediction.
+  auto regress = [&](const std::vector<double>& pred) {
+    double n = 0.0, sx = 0.0, sr = 0.0, sxx = 0.0, sxr = 0.0;
+    for (std::size_t t = 0; t < rec.size(); ++t) {
+      if (!train[t]) continue;
+      const double r = rec.y[t] - pred[t];
+      n += 1.0;
+      sx += g(t);
+      sr += r;
+      sxx += g(t) * g(t);
+      sxr += g(t) * r;
+    }
+    const double slope = (sxr - sx * sr / n) / std::max(sxx - sx * sx / n, 1e-300);
+    return std::pair{(sr - slope * sx) / n, slope};
+  };
+  std::vector<double> w(rec.size());
+  auto refit = [&](double c, double b, bool quick) {
+    for (std::size_t t = 0; t < rec.size(); ++t) w[t] = rec.y[t] - c - b * g(t);
+    return ctx.base.fit(train, {{}, &w, quick}).pred;
+  };
+  std::vector<double> pred = refit(0.0, 0.0, true);
+  double c = 0.0, b[3];
+  for (double& bk : b) {
+    std::tie(c, bk) = regress(pred);
+    pred = refit(c, bk, true);
+  }
+  beta = b[2];
+  const double rho = (b[2] - b[1]) / (b[1] - b[0]);
+  if (std::isfinite(rho) && rho > 0.0 && rho < 0.95) beta = b[1] + (b[2] - b[1]) / (1.0 - rho);
+  pred = refit(c, beta, false);
+  // The offset again, with the baseline's own level settled.
+  double n = 0.0, offset = 0.0;
+  for (std::size_t t = 0; t < rec.size(); ++t) {
+    if (!train[t]) continue;
+    n += 1.0;
+    offset += rec.y[t] - pred[t] - beta * g(t);
+  }
+  c = offset / n;
+  for (std::size_t t = 0; t < rec.size(); ++t) pred[t] += c + beta * g(t);
+  return pred;
+}
+
 Finding model_finding(Context& ctx, const std::string& effect, const std::string& extension,
                       const std::function<std::vector<double>(int fold)>& fold_prediction,
                       const std::string& what, const std::vector<char>& use) {
@@ -333,8 +397,7 @@ Finding model_finding(Context& ctx, const std::string& effect, const std::string
   if (!use.empty()) {
     f.on_identified = true;
     f.heldout_rms_before = s.rms_before;
-    on = fmt::format(" on the {} held-out readings whose memory their training identified",
-                     std::count_if(use.begin(), use.end(), [](char c) { return c != 0; }));
+    on = fmt::format(" {}", on_identified_readings(s.count));
   }
   f.evidence = fmt::format(
       "{}: held-out E_RMS{} from {:.3f} to {:.3f} % of range (sign-flip p = {:.3f} over {} "

@@ -265,37 +265,21 @@ Finding kelvin_creep(Context& ctx) {
       },
       "the response lags its rate-independent value with the readings' own timing");
   f.extended_model += " (per fold: " + chosen + ")";
-  // Scored also on the held-out readings whose memory their training identified, where at
-  // least kMinIdentified are (as the moving Preisach model, noncongruence.cpp): a lag acts on
-  // every reading, so its gain shows there. Elsewhere the baseline guesses across a part of
-  // the plane no training cycle traversed, and the element gains or loses by how it bends that
-  // guess: a gain on every reading counts only where at least half of it holds on the
-  // identified ones, and a gain there at alpha is named by itself, reported on those readings
-  // (then compared with the other effects' gains there, diagnose.cpp). Measured, session 52:
-  // fourth-generator load creeps (seeds 5000, 5101) gaining -9.0 and 16.7 % on every held-out
-  // reading and 75.2 and 33.7 % on the identified ones, named `none` before; a clean
-  // third-generator record of random turning points (seed 5359), 14.8 % at p = 0.007 on every
-  // reading and 5.5 % on its 37 identified ones, named `creep` before. Over 425 load records of
-  // five generators 312 -> 318 right, the rig's 72 load records as before.
-  // The p-value there is drawn on a stream of its own, so the other tests draw as before.
-  // Only where some scored readings are not identified: where all are, it is the same test
-  // drawn again, a second chance at alpha (measured: a third-generator voltage lonely stroke,
-  // seed 2002, all 202 scored readings identified, the element at p = 0.010 and again at
-  // p = 0.006, named `creep`).
-  std::size_t scored = 0, identified = 0;
-  for (const auto& block : ctx.blocks) {
-    for (std::size_t t : block) {
-      ++scored;
-      identified += ctx.identified[t] ? 1 : 0;
-    }
-  }
-  if (identified >= kMinIdentified && identified < scored) {
+  // Scored also on the held-out readings whose memory their training identified (as the moving
+  // Preisach model, noncongruence.cpp), where at least kMinIdentified are: a lag acts on every
+  // reading, while elsewhere the baseline guesses across a part of the plane no training cycle
+  // traversed and the element gains or loses by how it bends that guess. A gain there at alpha
+  // names it, reported on those readings; a gain on every reading counts only where at least
+  // half of it holds there (measurements: docs/diagnose-log.md, session 52). The p-value is
+  // drawn on a stream of its own, so the other tests draw as before. Not where every scored
+  // reading is identified: that would be the same test drawn again, a second chance at alpha.
+  const std::size_t identified = identified_scored(ctx).size();
+  if (identified >= kMinIdentified && identified < ctx.scored.size()) {
     std::mt19937_64 own(ctx.opt.seed + 31);
     const Score s = score(ctx, f.heldout_prediction, ctx.identified, &own);
-    f.evidence += fmt::format(
-        "; on the {} held-out readings whose memory their training identified, from {:.3f} to "
-        "{:.3f} % of range (sign-flip p = {:.3f})",
-        identified, s.rms_before, s.rms_after, s.p_value);
+    f.evidence +=
+        fmt::format("; {}, from {:.3f} to {:.3f} % of range (sign-flip p = {:.3f})",
+                    on_identified_readings(identified), s.rms_before, s.rms_after, s.p_value);
     if (s.p_value < ctx.opt.alpha && s.gain_pct >= ctx.opt.min_gain_pct) {
       f.on_identified = f.detected = true;
       f.heldout_rms_before = s.rms_before;

@@ -65,10 +65,17 @@ struct Context {
 /// structure beside the baseline's gaps.
 constexpr std::size_t kMinIdentified = 10;
 
+/// The scored readings whose memory their fold's training identified (Context::identified), in
+/// order: the one count of them the detectors and the report use.
+std::vector<std::size_t> identified_scored(const Context& ctx);
+/// "on the N held-out readings whose memory their training identified", for evidence.
+std::string on_identified_readings(std::size_t count);
+
 /// Held-out comparison of an extension's out-of-fold prediction with the baseline's, on the
 /// scored rows that `use` admits (all when empty): E_RMS after (% of range), the gain, and the
 /// sign-flip p-value of the per-block gains (drawn from `rng`, the context's stream when null).
 struct Score {
+  std::size_t count = 0;    ///< readings compared
   double rms_before = 0.0;  ///< the baseline's, on the rows scored (% of range)
   double rms_after = 0.0;
   double gain_pct = 0.0;
@@ -76,9 +83,29 @@ struct Score {
 };
 Score score(Context& ctx, const std::vector<double>& after, const std::vector<char>& use = {},
             std::mt19937_64* rng = nullptr);
+/// The same comparison without the p-value (left at 1), for a gain that is compared, not
+/// tested: no random draws. `block_gains` receives the per-block gains when given.
+Score heldout_gain(const Context& ctx, const std::vector<double>& after,
+                   const std::vector<char>& use = {}, std::vector<double>* block_gains = nullptr);
 
 /// Features of an effect, one row per reading, computed from one fold's baseline fit.
 using Features = std::function<Eigen::MatrixXd(const FoldFit&)>;
+
+/// For its lifetime the context's permutation tests draw from a stream of their own, seeded
+/// from the options' seed and `salt`; the shared stream is restored where it was.
+class OwnStream {
+ public:
+  OwnStream(Context& ctx, std::uint64_t salt) : ctx_(ctx), shared_(ctx.rng) {
+    ctx.rng.seed(ctx.opt.seed + salt);
+  }
+  ~OwnStream() { ctx_.rng = shared_; }
+  OwnStream(const OwnStream&) = delete;
+  OwnStream& operator=(const OwnStream&) = delete;
+
+ private:
+  Context& ctx_;
+  std::mt19937_64 shared_;
+};
 
 /// An effect seen as a residual signature X: block-permutation test of R^2(r ~ X), and the
 /// two-stage extension y = baseline + X beta (beta on each fold's training rows). With
@@ -94,6 +121,16 @@ Finding feature_finding(Context& ctx, const std::string& effect, const std::stri
 Finding model_finding(Context& ctx, const std::string& effect, const std::string& extension,
                       const std::function<std::vector<double>(int fold)>& fold_prediction,
                       const std::string& what, const std::vector<char>& use = {});
+
+/// One fold's baseline fitted together with an offset c and a multiple beta of the regressor g
+/// (backfitting): the baseline refitted on y - c - beta g and (c, beta) regressed on the
+/// training residuals, in turn; the regressor is one column, so each round moves beta the same
+/// fraction of the way to the joint fit (exactly so for a linear least-squares baseline, nearly
+/// for NNLS): three rounds on one grid give that fraction and the limit (Aitken's
+/// extrapolation), then a fit on the full grid and the offset again. Returns the prediction of
+/// every row with c + beta g added.
+std::vector<double> fit_with_regressor(const Context& ctx, const std::vector<char>& train,
+                                       const std::function<double(std::size_t)>& g, double& beta);
 
 Finding not_tested(const Context& ctx, const std::string& effect, const std::string& why);
 

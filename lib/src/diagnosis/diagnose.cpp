@@ -68,7 +68,8 @@ double sustained_rms_pct(const diagnosis::Context& ctx, const std::vector<std::s
 /// that hold its first rise (until the input first reaches its maximum): that fold, held out,
 /// trains no running-maximum term, while a Kelvin element fitted on the other folds offsets the
 /// first rise too.
-bool creep_outgains_lonely(diagnosis::Context& ctx, const Finding& creep, const Finding& lonely) {
+bool creep_outgains_lonely(const diagnosis::Context& ctx, const Finding& creep,
+                           const Finding& lonely) {
   const auto outgains = [](double a, double b) { return a > kCreepOverLonely * b; };
   const diagnosis::Record& rec = ctx.rec;
   if (rec.several_loads || rec.input_is_load || rec.seg_first.size() != 1 ||
@@ -87,8 +88,8 @@ bool creep_outgains_lonely(diagnosis::Context& ctx, const Finding& creep, const 
     count += use[t];
   }
   if (count < 20) return outgains(creep.gain_pct, lonely.gain_pct);
-  return outgains(diagnosis::score(ctx, creep.heldout_prediction, use).gain_pct,
-                  diagnosis::score(ctx, lonely.heldout_prediction, use).gain_pct);
+  return outgains(diagnosis::heldout_gain(ctx, creep.heldout_prediction, use).gain_pct,
+                  diagnosis::heldout_gain(ctx, lonely.heldout_prediction, use).gain_pct);
 }
 
 /// The record with its folds, the baseline and the held-out context, which refer to each other.
@@ -229,10 +230,7 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   d.max_pct_range = 100.0 * rmax / rec.range;
   d.noise_floor_pct_range = 100.0 * ctx.noise_sd / rec.range;
   d.sustained_rms_pct_range = sustained_rms_pct(ctx, ctx.scored);
-  std::vector<std::size_t> identified_rows;
-  for (std::size_t t : ctx.scored) {
-    if (ctx.identified[t]) identified_rows.push_back(t);
-  }
+  const std::vector<std::size_t> identified_rows = diagnosis::identified_scored(ctx);
   d.identified_rows = identified_rows.size();
   d.identified_sustained_rms_pct_range = sustained_rms_pct(ctx, identified_rows);
   d.protocol_limits = protocol_limits_of(data);
@@ -343,8 +341,7 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
                   [](const Finding& f) { return f.detected && f.on_identified; });
   auto compared_gain = [&](const Finding& f) {
     if (!like_for_like || f.on_identified || f.heldout_prediction.empty()) return f.gain_pct;
-    std::mt19937_64 unused(0);  // the p-value is not read; the context's stream is left alone
-    return diagnosis::score(ctx, f.heldout_prediction, ctx.identified, &unused).gain_pct;
+    return diagnosis::heldout_gain(ctx, f.heldout_prediction, ctx.identified).gain_pct;
   };
   const Finding* by_gain = nullptr;
   double by_gain_pct = 0.0;

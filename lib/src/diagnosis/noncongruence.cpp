@@ -70,8 +70,7 @@ Finding detect_noncongruence(Context& ctx) {
   // warped by the output, guesses differently from the baseline (measured: a clean
   // fifth-generator load record, fresh seed 5402, L = 8, 75 of 109 held-out readings
   // identified, the moving model gaining 18.6 % at p = 0.001 on all of them).
-  const std::size_t identified =
-      static_cast<std::size_t>(std::count(ctx.identified.begin(), ctx.identified.end(), 1));
+  const std::size_t identified = identified_scored(ctx).size();
   // Each fold's quick refit at c = 0, the yardstick both families' candidates are chosen
   // against, computed once per fold (NaN until then).
   std::vector<double> quick_baseline_sse(ctx.by_fold.size(),
