@@ -173,6 +173,9 @@
 #   ones: `none` (`creep` before). And a second-generator load drift (seed 5101) named `creep`
 #   by that element (23.0 % on its identified readings, -2.4 % on all) over a trend gaining
 #   19.5 % on all, before the gains were compared on the same readings: `drift`.
+# - A settling drift fitted as one (session 53): a fourth-generator settling load drift (seed
+#   5602), the line fitted with the baseline gaining 35.9 % and the Kelvin element 54.2 %, named
+#   `creep` before; the settling trend gains 55.1 %: `drift`.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -256,6 +259,7 @@ make_cases c c 1 5359 load-none
 make_cases d d 1 5000 load-creep
 make_cases d d 1 5101 load-creep
 make_cases b b 1 5101 load-drift
+make_cases d d 1 5602 load-drift
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -350,5 +354,6 @@ expect "$work/c/load-none-5359.csv" none
 expect "$work/d/load-creep-5000.csv" creep
 expect "$work/d/load-creep-5101.csv" creep
 expect "$work/b/load-drift-5101.csv" drift
+expect "$work/d/load-drift-5602.csv" drift
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]

@@ -190,23 +190,70 @@ std::optional<Finding> drift_sized_within_segments(Context& ctx) {
 // clean records too where that signature sits at alpha (two clean independent-generator
 // records, trends of 0.6 and 0.3 % of the range against floors of 0.68 and 0.50 %, gained 9.4
 // and 7.8 % at p = 0.001 and 0.004; the two-stage trend 4.8 %).
-Finding trend_fitted_with_baseline(Context& ctx) {
-  const OwnStream own(ctx, 11);
+// The settling drift (a warm-up) as exp(-k x), x the time in units of the record, k chosen on
+// each fold baseline's training residuals among kSettlingRates: the shape that relaxes over a
+// half to an eighth of the record.
+constexpr double kSettlingRates[] = {2.0, 3.0, 5.0, 8.0};
+
+// Residual sum of squares of r ~ 1 + g on the training rows.
+double line_fit_sse(const std::vector<double>& r, const std::vector<double>& g,
+                    const std::vector<char>& train) {
+  double n = 0.0, sg = 0.0, sr = 0.0, sgg = 0.0, sgr = 0.0, srr = 0.0;
+  for (std::size_t t = 0; t < r.size(); ++t) {
+    if (!train[t]) continue;
+    n += 1.0;
+    sg += g[t];
+    sr += r[t];
+    sgg += g[t] * g[t];
+    sgr += g[t] * r[t];
+    srr += r[t] * r[t];
+  }
+  const double vgg = sgg - sg * sg / n, vgr = sgr - sg * sr / n;
+  return srr - sr * sr / n - (vgg > 0.0 ? vgr * vgr / vgg : 0.0);
+}
+
+Finding trend_fitted_with_baseline(Context& ctx, bool settling) {
+  const OwnStream own(ctx, settling ? 19 : 11);
   const Record& rec = ctx.rec;
   const double t0 = rec.time.front(), t1 = std::max(rec.time.back(), t0 + 1e-300);
   auto x = [&](std::size_t t) { return (rec.time[t] - t0) / (t1 - t0); };
   std::string trends;
   double trend_sum = 0.0;
   Finding f = model_finding(
-      ctx, "drift", "baseline fitted with a linear trend in time",
+      ctx, "drift",
+      settling ? "baseline fitted with a settling trend in time, exp(-k t / T) over the record's "
+                 "duration T (k chosen in-fold)"
+               : "baseline fitted with a linear trend in time",
       [&](int k) {
-        double beta = 0.0;
-        std::vector<double> pred = fit_with_regressor(ctx, ctx.train_mask(k), x, beta);
-        trends += fmt::format("{}{:.3g}", trends.empty() ? "" : ", ", 100.0 * beta / rec.range);
+        const std::vector<char> train = ctx.train_mask(k);
+        double beta = 0.0, rate = 0.0;
+        std::vector<double> pred;
+        if (!settling) {
+          pred = fit_with_regressor(ctx, train, x, beta);
+        } else {
+          const std::vector<double>& base = ctx.by_fold[static_cast<std::size_t>(k)].pred;
+          std::vector<double> r(rec.size()), g(rec.size());
+          for (std::size_t t = 0; t < rec.size(); ++t) r[t] = rec.y[t] - base[t];
+          double best = std::numeric_limits<double>::infinity();
+          for (double candidate : kSettlingRates) {
+            for (std::size_t t = 0; t < rec.size(); ++t) g[t] = std::exp(-candidate * x(t));
+            const double sse = line_fit_sse(r, g, train);
+            if (sse < best) {
+              best = sse;
+              rate = candidate;
+            }
+          }
+          pred = fit_with_regressor(
+              ctx, train, [&](std::size_t t) { return std::exp(-rate * x(t)); }, beta);
+          beta *= std::exp(-rate) - 1.0;  // the trend's change over the record
+        }
+        trends += fmt::format("{}{:.3g}{}", trends.empty() ? "" : ", ", 100.0 * beta / rec.range,
+                              settling ? fmt::format(" (k {:g})", rate) : "");
         trend_sum += beta;
         return pred;
       },
-      "a linear trend in time fitted with the baseline (backfitted)");
+      settling ? "a settling trend in time fitted with the baseline (backfitted)"
+               : "a linear trend in time fitted with the baseline (backfitted)");
   f.extended_model += " (trend over the record per fold, % of range: " + trends + ")";
   const double trend = std::abs(trend_sum) / rec.folds;
   f.detected =
@@ -285,8 +332,25 @@ Finding detect_drift(Context& ctx) {
     // other folds never traversed follows the protocol, and so time; the two-stage trend
     // gained 1.6 %).
     // Fitted only there: five more baseline fits per fold.
-    if (f.detected) {
-      Finding joint = trend_fitted_with_baseline(ctx);
+    // And a drift that settles (a warm-up) fitted as one, exp(-k t / T)
+    // (trend_fitted_with_baseline), kept where detected and gaining more than the line fitted
+    // with the baseline: a line takes up a warm-up only in part, and a Kelvin element relaxing
+    // over the record takes up more of it (measured, session 53: a fourth-generator settling
+    // drift, fresh seed 5602, the line 35.9 %, the Kelvin element 54.2 %, named `creep`; the
+    // settling trend 55.1 %, `drift`). Over the 425 load records of five generators and 70 fresh
+    // ones (seeds 5800-5801, and clean 5700-5703) no other name changed; the settling trend was
+    // kept on 25 records: 19 drifts, and 6 creeps the Kelvin element still outgains.
+    // The settling trend is fitted also where readings in one memory state differ with time
+    // (the return-point time signature at alpha) while the two-stage line misses its gain (a rig
+    // load record of a 10 % warm-up: the line gained 7.7 % at p = 0.089 and the Kelvin element
+    // 42.4 %, named `creep`; ADriftThatSettlesIsFittedAsOne).
+    const Signature& in_time = ctx.return_point.time;
+    if (f.detected || (in_time.available && in_time.p_value < ctx.opt.alpha)) {
+      Finding joint;
+      if (f.detected) joint = trend_fitted_with_baseline(ctx, false);
+      Finding settled = trend_fitted_with_baseline(ctx, true);
+      if (settled.detected && !(joint.detected && joint.gain_pct >= settled.gain_pct))
+        joint = std::move(settled);
       if (joint.detected && joint.gain_pct > f.gain_pct) {
         joint.evidence = f.evidence + "; " + joint.evidence;
         f = std::move(joint);
