@@ -267,6 +267,8 @@ Finding trend_fitted_with_baseline(Context& ctx, bool settling) {
 
 Finding detect_drift(Context& ctx) {
   const Record& rec = ctx.rec;
+  // Readings in one memory state within a segment that differ with the time between them.
+  const Signature& sig = ctx.return_point.time;
   const double t0 = rec.time.front(), t1 = std::max(rec.time.back(), t0 + 1e-300);
   // Load tests: one trend over the record. Tests held out by load segment: the drift lives in
   // the offset map, and when the loads were tested in the order of their size the map's trend
@@ -349,8 +351,7 @@ Finding detect_drift(Context& ctx) {
     // element 53.0 %, time signature p = 0.16; CreepMuchSlowerThanTheHoldsReadDuringHolds).
     // On load tests only: at several loads held out by cycles (one to three loads, and the
     // lonely stroke's second look, diagnose.cpp) it was not measured.
-    const Signature& in_time = ctx.return_point.time;
-    const bool settling = rec.input_is_load && in_time.available && in_time.p_value < ctx.opt.alpha;
+    const bool settling = rec.input_is_load && sig.available && sig.p_value < ctx.opt.alpha;
     if (f.detected || settling) {
       Finding joint;
       if (f.detected) joint = trend_fitted_with_baseline(ctx, false);
@@ -365,7 +366,6 @@ Finding detect_drift(Context& ctx) {
       }
     }
   }
-  const Signature& sig = ctx.return_point.time;
   if (sig.available) {
     f.evidence += "; " + describe(sig);
     // Readings in the same state that drift apart with time are a drift whatever the model:
