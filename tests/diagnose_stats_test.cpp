@@ -1,6 +1,6 @@
-// Diagnose's private statistics (lib/src/diagnosis): the one-sided sign-flip test of the
-// per-block held-out gains (stats.hpp), and the calibration of the congruency signature
-// and of the return-point signature (signatures.hpp).
+// Diagnose's private statistics (lib/src/diagnosis): the least-squares line and the one-sided
+// sign-flip test of the per-block held-out gains (stats.hpp), and the calibration of the congruency
+// signature and of the return-point signature (signatures.hpp).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -41,6 +41,43 @@ TEST(RobustStatistics, MedianAndMadAreOddUnderNegationAndExact) {
     EXPECT_DOUBLE_EQ(mad(neg), mad(v)) << n;
     EXPECT_NEAR(mad(shifted), 2.5 * mad(v), 1e-12) << n;
   }
+}
+
+// The least-squares line from running sums: exact on points on a line; on scattered points the
+// slope and intercept zero the normal equations' residual moments and the SSE is the residuals'
+// sum of squares, both computed here from the returned coefficients.
+TEST(LineSums, TheLeastSquaresLineAndItsResidualSumOfSquares) {
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> g(0.0, 1.0);
+  for (int n = 2; n <= 40; ++n) {
+    std::vector<double> x(static_cast<std::size_t>(n)), y(x.size());
+    LineSums exact, noisy;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      x[i] = 3.0 * g(rng) + 1.0;
+      exact.add(x[i], -0.75 * x[i] + 2.0);
+      y[i] = 0.4 * x[i] - 1.0 + g(rng);
+      noisy.add(x[i], y[i]);
+    }
+    EXPECT_NEAR(exact.slope(), -0.75, 1e-12) << n;
+    EXPECT_NEAR(exact.intercept(exact.slope()), 2.0, 1e-12) << n;
+    EXPECT_NEAR(exact.sse(), 0.0, 1e-10) << n;
+    const double b = noisy.slope(), c = noisy.intercept(b);
+    double m0 = 0.0, m1 = 0.0, sse = 0.0;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      const double e = y[i] - c - b * x[i];
+      m0 += e;
+      m1 += e * x[i];
+      sse += e * e;
+    }
+    EXPECT_NEAR(m0, 0.0, 1e-9) << n;
+    EXPECT_NEAR(m1, 0.0, 1e-9) << n;
+    EXPECT_NEAR(noisy.sse(), sse, 1e-9 * (1.0 + sse)) << n;
+  }
+  LineSums flat;  // x does not vary: no slope, the intercept is the mean
+  for (double y : {1.0, 2.0, 6.0}) flat.add(5.0, y);
+  EXPECT_EQ(flat.slope(), 0.0);
+  EXPECT_DOUBLE_EQ(flat.intercept(0.0), 3.0);
+  EXPECT_DOUBLE_EQ(flat.sse(), 14.0);
 }
 
 TEST(SignFlip, ExactWhenFewBlocks) {

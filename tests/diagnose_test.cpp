@@ -59,6 +59,24 @@ const Finding& finding(const Diagnosis& d, const std::string& effect) {
                        [&](const Finding& f) { return f.effect == effect; });
 }
 
+// The per-fold trends a drift's extended_model lists ("... per fold, % of range: 2.4, 9.1 (k 3),
+// ...)"), each fold's note in parentheses skipped; empty where it lists none.
+std::vector<double> per_fold_trends(const std::string& m) {
+  const std::string key = "per fold, % of range: ";
+  std::vector<double> values;
+  std::size_t at = m.find(key);
+  if (at == std::string::npos) return values;
+  for (at += key.size(); at < m.size() && m[at] != ')';) {
+    std::size_t used = 0;
+    values.push_back(std::stod(m.substr(at), &used));
+    at += used;
+    while (at < m.size() && m[at] == ' ') ++at;
+    if (at < m.size() && m[at] == '(') at = m.find(')', at) + 1;  // the fold's note
+    while (at < m.size() && (m[at] == ',' || m[at] == ' ')) ++at;
+  }
+  return values;
+}
+
 TEST(Diagnose, LoadTestsCleanDriftOutliersCreep) {
   SCPKIT_SKIP_UNDER_SANITIZERS();
   // On clean data the Kelvin creep extension may choose no creep, and does: it loses nothing
@@ -1025,16 +1043,7 @@ TEST(Diagnose, TheTrendFittedWithTheBaselineIsTheHiddenDrift) {
     EXPECT_EQ(d.cause, "drift") << s.describe();
     const Finding& f = finding(d, "drift");
     const std::string& m = f.extended_model;
-    const std::string key = "per fold, % of range: ";
-    const std::size_t at = m.find(key);
-    ASSERT_NE(at, std::string::npos) << m;
-    std::vector<double> trends;
-    for (std::size_t p = at + key.size(); p < m.size() && m[p] != ')';) {
-      std::size_t used = 0;
-      trends.push_back(std::stod(m.substr(p), &used));
-      p += used;
-      while (p < m.size() && (m[p] == ',' || m[p] == ' ')) ++p;
-    }
+    const std::vector<double> trends = per_fold_trends(m);
     ASSERT_EQ(trends.size(), static_cast<std::size_t>(d.heldout_folds)) << m;
     for (double t : trends) EXPECT_NEAR(t, truth, 0.35 * truth) << s.describe() << ": " << m;
   }
@@ -1077,16 +1086,7 @@ TEST(Diagnose, ADriftThatSettlesIsFittedAsOne) {
     // The change over the record per fold, in % of the output range (the drifted record's).
     const auto [dlo, dhi] = std::minmax_element(data.output.begin(), data.output.end());
     const double truth = 100.0 * c.size * range * (1.0 - std::exp(-c.rate)) / (*dhi - *dlo);
-    const std::string key = "per fold, % of range: ";
-    std::size_t at = m.find(key);
-    ASSERT_NE(at, std::string::npos) << m;
-    std::vector<double> changes;
-    for (at += key.size(); at < m.size() && m[at] != ')';) {
-      std::size_t used = 0;
-      changes.push_back(std::stod(m.substr(at), &used));
-      at = m.find(')', at + used) + 1;  // past " (k ...)"
-      while (at < m.size() && (m[at] == ',' || m[at] == ' ')) ++at;
-    }
+    std::vector<double> changes = per_fold_trends(m);
     ASSERT_EQ(changes.size(), static_cast<std::size_t>(d.heldout_folds)) << m;
     std::nth_element(changes.begin(),
                      changes.begin() + static_cast<std::ptrdiff_t>(changes.size() / 2),

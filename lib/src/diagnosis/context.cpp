@@ -335,18 +335,12 @@ std::vector<double> fit_with_regressor(const Context& ctx, const std::vector<cha
   const Record& rec = ctx.rec;
   // (c, beta) on the training rows of y - prediction.
   auto regress = [&](const std::vector<double>& pred) {
-    double n = 0.0, sx = 0.0, sr = 0.0, sxx = 0.0, sxr = 0.0;
+    LineSums line;
     for (std::size_t t = 0; t < rec.size(); ++t) {
-      if (!train[t]) continue;
-      const double r = rec.y[t] - pred[t];
-      n += 1.0;
-      sx += g(t);
-      sr += r;
-      sxx += g(t) * g(t);
-      sxr += g(t) * r;
+      if (train[t]) line.add(g(t), rec.y[t] - pred[t]);
     }
-    const double slope = (sxr - sx * sr / n) / std::max(sxx - sx * sx / n, 1e-300);
-    return std::pair{(sr - slope * sx) / n, slope};
+    const double slope = line.slope();
+    return std::pair{line.intercept(slope), slope};
   };
   std::vector<double> w(rec.size());
   auto refit = [&](double c, double b, bool quick) {

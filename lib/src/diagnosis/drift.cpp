@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "detectors.hpp"
+#include "stats.hpp"
 
 namespace scpkit::diagnosis {
 
@@ -190,29 +191,14 @@ std::optional<Finding> drift_sized_within_segments(Context& ctx) {
 // clean records too where that signature sits at alpha (two clean independent-generator
 // records, trends of 0.6 and 0.3 % of the range against floors of 0.68 and 0.50 %, gained 9.4
 // and 7.8 % at p = 0.001 and 0.004; the two-stage trend 4.8 %).
-// The settling drift (a warm-up) as exp(-k x), x the time in units of the record, k chosen on
-// each fold baseline's training residuals among kSettlingRates: the shape that relaxes over a
-// half to an eighth of the record.
+// The trend's shape: a line, or a drift that settles (a warm-up) as exp(-k x), x the time in
+// units of the record, k chosen on each fold baseline's training residuals among
+// kSettlingRates: the shape that relaxes over a half to an eighth of the record.
+enum class TrendShape { kLine, kSettling };
 constexpr double kSettlingRates[] = {2.0, 3.0, 5.0, 8.0};
 
-// Residual sum of squares of r ~ 1 + g on the training rows.
-double line_fit_sse(const std::vector<double>& r, const std::vector<double>& g,
-                    const std::vector<char>& train) {
-  double n = 0.0, sg = 0.0, sr = 0.0, sgg = 0.0, sgr = 0.0, srr = 0.0;
-  for (std::size_t t = 0; t < r.size(); ++t) {
-    if (!train[t]) continue;
-    n += 1.0;
-    sg += g[t];
-    sr += r[t];
-    sgg += g[t] * g[t];
-    sgr += g[t] * r[t];
-    srr += r[t] * r[t];
-  }
-  const double vgg = sgg - sg * sg / n, vgr = sgr - sg * sr / n;
-  return srr - sr * sr / n - (vgg > 0.0 ? vgr * vgr / vgg : 0.0);
-}
-
-Finding trend_fitted_with_baseline(Context& ctx, bool settling) {
+Finding trend_fitted_with_baseline(Context& ctx, TrendShape shape) {
+  const bool settling = shape == TrendShape::kSettling;
   const OwnStream own(ctx, settling ? 19 : 11);
   const Record& rec = ctx.rec;
   const double t0 = rec.time.front(), t1 = std::max(rec.time.back(), t0 + 1e-300);
@@ -232,12 +218,15 @@ Finding trend_fitted_with_baseline(Context& ctx, bool settling) {
           pred = fit_with_regressor(ctx, train, x, beta);
         } else {
           const std::vector<double>& base = ctx.by_fold[static_cast<std::size_t>(k)].pred;
-          std::vector<double> r(rec.size()), g(rec.size());
+          std::vector<double> r(rec.size());
           for (std::size_t t = 0; t < rec.size(); ++t) r[t] = rec.y[t] - base[t];
           double best = std::numeric_limits<double>::infinity();
           for (double candidate : kSettlingRates) {
-            for (std::size_t t = 0; t < rec.size(); ++t) g[t] = std::exp(-candidate * x(t));
-            const double sse = line_fit_sse(r, g, train);
+            LineSums line;
+            for (std::size_t t = 0; t < rec.size(); ++t) {
+              if (train[t]) line.add(std::exp(-candidate * x(t)), r[t]);
+            }
+            const double sse = line.sse();
             if (sse < best) {
               best = sse;
               rate = candidate;
@@ -335,28 +324,20 @@ Finding detect_drift(Context& ctx) {
     // gained 1.6 %).
     // Fitted only there: five more baseline fits per fold.
     // And a drift that settles (a warm-up) fitted as one, exp(-k t / T)
-    // (trend_fitted_with_baseline), kept where detected and gaining more than the line fitted
-    // with the baseline: a line takes up a warm-up only in part, and a Kelvin element relaxing
-    // over the record takes up more of it (measured, session 53: a fourth-generator settling
-    // drift, fresh seed 5602, the line 35.9 %, the Kelvin element 54.2 %, named `creep`; the
-    // settling trend 55.1 %, `drift`). Over the 425 load records of five generators and 70 fresh
-    // ones (seeds 5800-5801, and clean 5700-5703) no other name changed; the settling trend was
-    // kept on 25 records: 19 drifts, and 6 creeps the Kelvin element still outgains.
-    // The settling trend only where readings in one memory state differ with time (the
-    // return-point time signature at alpha), also where the two-stage line misses its gain (a
-    // rig load record of a 10 % warm-up: the line gained 7.7 % at p = 0.089 and the Kelvin
-    // element 42.4 %, named `creep`; ADriftThatSettlesIsFittedAsOne). Not without that
-    // signature: a fast exp(-k t / T) takes up a Kelvin element relaxing from the record's start
-    // (a rig creep of 0.3 at tau 300 s, 10 s holds read twice: the settling trend 70.9 %, the
-    // element 53.0 %, time signature p = 0.16; CreepMuchSlowerThanTheHoldsReadDuringHolds).
-    // On load tests only: at several loads held out by cycles (one to three loads, and the
-    // lonely stroke's second look, diagnose.cpp) it was not measured.
-    const bool settling = rec.input_is_load && sig.available && sig.p_value < ctx.opt.alpha;
-    if (f.detected || settling) {
+    // (trend_fitted_with_baseline), kept where detected and gaining more than the line: a line
+    // takes up a warm-up only in part, and a Kelvin element relaxing over the record takes up
+    // more of it (session 53: fresh fourth-generator drift 5602, the line 35.9 %, the element
+    // 54.2 %, the settling trend 55.1 %). Only where readings in one memory state differ with
+    // time (the return-point time signature at alpha): without it a fast exp(-k t / T) takes up
+    // a Kelvin element relaxing from the record's start
+    // (CreepMuchSlowerThanTheHoldsReadDuringHolds). Load tests only: at one to three loads held out
+    // by cycles it was not measured. The measurements are in the log, "Session 53".
+    const bool try_settling = rec.input_is_load && sig.available && sig.p_value < ctx.opt.alpha;
+    if (f.detected || try_settling) {
       Finding joint;
-      if (f.detected) joint = trend_fitted_with_baseline(ctx, false);
-      if (settling) {
-        Finding settled = trend_fitted_with_baseline(ctx, true);
+      if (f.detected) joint = trend_fitted_with_baseline(ctx, TrendShape::kLine);
+      if (try_settling) {
+        Finding settled = trend_fitted_with_baseline(ctx, TrendShape::kSettling);
         if (settled.detected && !(joint.detected && joint.gain_pct >= settled.gain_pct))
           joint = std::move(settled);
       }

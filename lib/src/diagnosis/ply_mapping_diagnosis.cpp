@@ -9,6 +9,7 @@
 #include "scpkit/error.hpp"
 #include "scpkit/identification/preisach_fit.hpp"
 #include "scpkit/mechanics/ply_mapping.hpp"
+#include "stats.hpp"
 
 namespace scpkit {
 namespace {
@@ -16,21 +17,12 @@ namespace {
 // Least squares y = g x + c on the rows where use != 0; fixed_gain > 0 fixes g.
 std::pair<double, double> line(const std::vector<double>& x, const std::vector<double>& y,
                                const std::vector<char>& use, double fixed_gain) {
-  double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
+  diagnosis::LineSums sums;
   for (std::size_t t = 0; t < x.size(); ++t) {
-    if (!use[t]) continue;
-    n += 1;
-    sx += x[t];
-    sy += y[t];
-    sxx += x[t] * x[t];
-    sxy += x[t] * y[t];
+    if (use[t]) sums.add(x[t], y[t]);
   }
-  double g = fixed_gain;
-  if (!(g > 0.0)) {
-    const double den = n * sxx - sx * sx;
-    g = den > 0.0 ? (n * sxy - sx * sy) / den : 0.0;
-  }
-  return {g, (sy - g * sx) / std::max(n, 1.0)};
+  const double g = fixed_gain > 0.0 ? fixed_gain : sums.slope();
+  return {g, sums.intercept(g)};
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 // Private to diagnose: robust statistics and the two resampling tests that respect the
 // residuals' autocorrelation (blocks of consecutive readings move as units).
 #include <Eigen/Core>
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <random>
@@ -13,6 +14,31 @@ namespace scpkit::diagnosis {
 double median(std::vector<double> v);      ///< of an even count, the mean of the middle two
 double mad(const std::vector<double>& v);  ///< 1.4826 median |v - median| (sigma if Gaussian)
 double rms(std::span<const double> e);
+
+/// The sums of the least-squares line y ~ c + b x, accumulated row by row.
+struct LineSums {
+  double n = 0.0, sx = 0.0, sy = 0.0, sxx = 0.0, sxy = 0.0, syy = 0.0;
+  void add(double x, double y) {
+    n += 1.0;
+    sx += x;
+    sy += y;
+    sxx += x * x;
+    sxy += x * y;
+    syy += y * y;
+  }
+  /// The least-squares slope b; 0 where x does not vary.
+  double slope() const {
+    const double vxx = sxx - sx * sx / n;
+    return vxx > 0.0 ? (sxy - sx * sy / n) / vxx : 0.0;
+  }
+  /// The least-squares intercept c for the slope b.
+  double intercept(double b) const { return (sy - b * sx) / std::max(n, 1.0); }
+  /// The residual sum of squares at the least-squares line.
+  double sse() const {
+    const double vxx = sxx - sx * sx / n, vxy = sxy - sx * sy / n;
+    return syy - sy * sy / n - (vxx > 0.0 ? vxy * vxy / vxx : 0.0);
+  }
+};
 
 /// Quantisation step of a signal: the smallest gap between distinct values when nearly every
 /// gap is a whole multiple of it; 0 when the signal is not quantised.
