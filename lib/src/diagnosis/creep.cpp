@@ -60,7 +60,7 @@ double reading_step(const Record& rec) {
 }
 
 // Permutations of the hold-time test: ten times the other tests', since where it names creep
-// alone it must reach alpha / 10 (diagnose.cpp).
+// alone it must reach alpha / 10 (cause.cpp).
 int dwell_permutations(const DiagnoseOptions& opt) { return 10 * opt.permutations; }
 
 // With one reading per hold, holds of different lengths are an experiment: the response lags
@@ -463,7 +463,7 @@ Finding detect_creep(Context& ctx) {
   // 1 of 12 named creep; the element gaining 35-66 %).
   Finding slow = kelvin_creep(ctx);
   // Known so by its gain alone, it competes by gain with the other gain-only effects
-  // (diagnose.cpp; measured: a rig voltage lonely stroke read three times per hold, the element
+  // (cause.cpp; measured: a rig voltage lonely stroke read three times per hold, the element
   // gaining 23.5 % against the running-maximum term's 34.7 %, was named creep otherwise).
   if (slow.detected && (!f.detected || slow.gain_pct > f.gain_pct)) {
     slow.evidence += "; " + describe(ctx.holds);

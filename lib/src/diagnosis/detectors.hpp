@@ -49,7 +49,7 @@ struct Context {
   Signature coupling;  ///< the loop shape changing with the load (detect_load_shape_coupling)
   /// Creep with readings during holds named by the Kelvin element's held-out gain while the
   /// readings during holds do not move at alpha (detect_creep): known by a gain only, it
-  /// competes by gain and yields to a drift seen in time (diagnose.cpp).
+  /// competes by gain and yields to a drift seen in time (cause.cpp).
   bool creep_by_gain_only = false;
   /// Held-out readings whose memory their fold's training identified (identified_readings).
   std::vector<char> identified;
@@ -111,7 +111,7 @@ class OwnStream {
 /// two-stage extension y = baseline + X beta (beta on each fold's training rows). With
 /// `signature`, that test is stored there too, resolved with ten times the permutations (on a
 /// stream of its own) where the usual count leaves p at its least value, so that it can be
-/// held to alpha / 10 (diagnose.cpp names some effects by their signature alone).
+/// held to alpha / 10 (cause.cpp names some effects by their signature alone).
 Finding feature_finding(Context& ctx, const std::string& effect, const std::string& extension,
                         const Features& features, const std::string& what,
                         Signature* signature = nullptr);
