@@ -1,20 +1,23 @@
 // scpkit diagnose DATA.csv: what the model gets wrong, the named cause, the extension's gain.
 #include <fmt/format.h>
 
+#include <cmath>
 #include <iostream>
+#include <sstream>
 
 #include "commands.hpp"
 #include "common.hpp"
 #include "scpkit/diagnosis/diagnose.hpp"
 #include "scpkit/diagnosis/ply_mapping_diagnosis.hpp"
+#include "scpkit/io/atomic_file.hpp"
 #include "scpkit/mechanics/material.hpp"
 
 namespace scpkit::cli {
 namespace {
 
 constexpr const char* kUsage =
-    "scpkit diagnose DATA.csv [--json] [--seed N] [--threads N] [--coil-d MM --coil-D MM "
-    "--coil-n N --legs K]";
+    "scpkit diagnose DATA.csv [--json] [--residuals OUT.csv] [--seed N] [--threads N] "
+    "[--coil-d MM --coil-D MM --coil-n N --legs K]";
 constexpr const char* kAbout =
     "Fits the baseline (a Preisach model) with held-out validation over whole cycles or the\n"
     "segment column, estimates the noise floor from the data, tests one signature per named\n"
@@ -28,7 +31,10 @@ constexpr const char* kAbout =
     "ply-mapping diagnosis instead: the SCP gain predicted from the material card and the coil\n"
     "(metadata coil_d_mm, coil_D_mm, coil_n, legs, or the flags) against the measured one, and\n"
     "the causes spring_index, legs, active_coils, input_scale scored on held-out cycles.\n"
-    "--json prints the SPEC's object. --threads only changes the time the diagnosis takes.";
+    "--json prints the SPEC's object. --residuals writes, beside the file's own columns, where\n"
+    "the model fails: each reading's held-out fold, the baseline's held-out prediction and\n"
+    "residual, and the named cause's extended model (in the response column's units; blank\n"
+    "where a reading was not scored). --threads only changes the time the diagnosis takes.";
 
 // The ply-mapping diagnosis of a paired thread/SCP test.
 int run_ply_mapping(const Measurement& m, const po::variables_map& vm) {
@@ -130,6 +136,47 @@ int run_ply_mapping(const Measurement& m, const po::variables_map& vm) {
   return kOk;
 }
 
+// The file's own columns and, per reading, where the model fails: the fold that held it out,
+// whether its training identified its memory, the baseline's held-out prediction and residual,
+// and the named cause's extended model and its residual, in the response column's units.
+std::string residuals_csv(const Measurement& m, const Signal& out, const Diagnosis& d) {
+  const MeasurementColumn* col = nullptr;
+  for (const auto& c : m.columns()) {
+    if (c.name == out.column) col = &c;
+  }
+  const double length_mm = m.meta_number("length_mm").value_or(1.0);
+  auto units = [&](double canonical) {
+    return col ? to_column_units(canonical, *col, length_mm, out.name) : canonical;
+  };
+  const Finding* cause = nullptr;
+  for (const Finding& f : d.findings) {
+    if (f.effect == d.cause && !f.heldout_prediction.empty()) cause = &f;
+  }
+  std::ostringstream csv;
+  for (const auto& c : m.columns()) csv << csv_field(c.name) << ",";
+  csv << "heldout_fold,identified,baseline_" << out.column << ",residual_" << out.column;
+  if (cause)
+    csv << "," << cause->effect << "_" << out.column << "," << cause->effect << "_residual_"
+        << out.column;
+  csv << "\n";
+  for (std::size_t r = 0; r < m.rows(); ++r) {
+    for (const auto& c : m.columns()) csv << csv_field(m.cell(r, c.position)) << ",";
+    const double base = d.baseline_prediction[r];
+    if (!std::isfinite(base)) {
+      csv << (cause ? ",,,,," : ",,,") << "\n";
+      continue;
+    }
+    csv << d.heldout_fold[r] + 1 << "," << (d.identified[r] ? 1 : 0) << ","
+        << csv_number(units(base)) << "," << csv_number(units(out.values[r] - base));
+    if (cause) {
+      const double ext = cause->heldout_prediction[r];
+      csv << "," << csv_number(units(ext)) << "," << csv_number(units(out.values[r] - ext));
+    }
+    csv << "\n";
+  }
+  return csv.str();
+}
+
 }  // namespace
 
 int run_diagnose(const std::vector<std::string>& args) {
@@ -137,8 +184,10 @@ int run_diagnose(const std::vector<std::string>& args) {
   opt.add_options()("help,h", "show this help")(
       "input", po::value<std::string>()->default_value(""), "input when several vary")(
       "seed", po::value<long long>()->default_value(1), "seed of the permutation tests")(
-      "json", "print one JSON object")("coil-d", po::value<double>(),
-                                       "ply mapping: SCP wire diameter d, mm")(
+      "json", "print one JSON object")("residuals", po::value<std::string>(),
+                                       "CSV to write: per reading, the held-out "
+                                       "prediction and residual")(
+      "coil-d", po::value<double>(), "ply mapping: SCP wire diameter d, mm")(
       "coil-D", po::value<double>(), "ply mapping: SCP MEAN coil diameter D, mm")(
       "coil-n", po::value<double>(), "ply mapping: SCP coils n (whole actuator)")(
       "legs", po::value<int>(), "ply mapping: SCP legs (1, or 2 double-backed)")(
@@ -147,8 +196,11 @@ int run_diagnose(const std::vector<std::string>& args) {
   po::variables_map vm;
   if (!parse_command_line(args, kUsage, kAbout, opt, {"DATA"}, vm)) return kOk;
   const Measurement m = Measurement::read(vm["DATA"].as<std::string>());
-  if (m.find(Quantity::kThreadStrain) && m.find(Quantity::kScpStrain))
+  if (m.find(Quantity::kThreadStrain) && m.find(Quantity::kScpStrain)) {
+    if (vm.count("residuals"))
+      throw UsageError("--residuals is for a test's diagnosis, not a paired thread/SCP file's");
     return run_ply_mapping(m, vm);
+  }
   const MeasurementColumn* drive = augmented_drive(m, vm["input"].as<std::string>());
   std::string note;
   const Signal in =
@@ -175,6 +227,8 @@ int run_diagnose(const std::vector<std::string>& args) {
       rethrow_at_column(m, out.column, std::string("cannot diagnose: ") + e.what());
     }
   }();
+  if (vm.count("residuals"))
+    write_file_atomically(vm["residuals"].as<std::string>(), residuals_csv(m, out, d));
   if (vm.count("json")) {
     nlohmann::json findings = nlohmann::json::array();
     for (const Finding& f : d.findings) {

@@ -189,6 +189,38 @@ assert [l['effect'] for l in d['protocol_limits']] == ['lonely_stroke', 'creep']
 assert all(l['note'] for l in d['protocol_limits'])" \
     <"$work/drift-3.json"
 fi
+# --residuals: where the model fails, per reading, beside the file's own columns; the same JSON.
+"$bin" diagnose "$work/drift.csv" --json --residuals "$work/drift-res.csv" >"$work/drift-r.json" 2>/dev/null
+assert "diagnose --residuals exits 0" test $? -eq 0
+assert "diagnose --residuals: the same JSON" cmp -s "$work/drift-1.json" "$work/drift-r.json"
+if command -v python3 >/dev/null; then
+  # Recomputed from the file: the scored readings' RMS residual (% of the response's range) is
+  # the baseline's held-out E_RMS, the cause's residuals its extension's E_RMS after.
+  assert "diagnose --residuals: one row per reading, the JSON's held-out errors" python3 -c "
+import csv, json, math, sys
+data = [l for l in open(sys.argv[1]) if not l.startswith('#')]
+rows = list(csv.DictReader(open(sys.argv[2])))
+d = json.load(open(sys.argv[3]))
+assert len(rows) == len(data) - 1, (len(rows), len(data))
+resp = [c for c in rows[0] if c.startswith('residual_')][0][len('residual_'):]
+y = [float(r[resp]) for r in rows]
+rng = max(y) - min(y)
+def rms(col):
+    e = [float(r[col]) for r in rows if r[col] != '']
+    return len(e), 100 * math.sqrt(sum(x * x for x in e) / len(e)) / rng
+n, base = rms('residual_' + resp)
+assert n == d['baseline']['heldout_rows'], (n, d['baseline']['heldout_rows'])
+assert abs(base - d['baseline']['rms_pct_range']) < 1e-6 * base, (base, d['baseline'])
+cause = [f for f in d['findings'] if f['effect'] == d['cause']][0]
+_, after = rms(d['cause'] + '_residual_' + resp)
+assert abs(after - cause['heldout_rms_after']) < 1e-6 * after, (after, cause['heldout_rms_after'])
+assert all(r['heldout_fold'] in [str(k) for k in range(1, d['baseline']['heldout_folds'] + 1)]
+           for r in rows if r['baseline_' + resp] != '')" \
+    "$work/drift.csv" "$work/drift-res.csv" "$work/drift-r.json"
+fi
+check "diagnose --residuals into a missing folder is an error naming it" 3 "no/such/r.csv" -- "$bin" diagnose "$work/drift.csv" --residuals "$work/no/such/r.csv"
+assert "diagnose --residuals writes nothing on an error" test ! -e "$work/no/such/r.csv"
+check "diagnose --residuals on a paired file is a usage error" 2 "--residuals is for a test" -- "$bin" diagnose "$ex/pair-4ply.csv" --residuals "$work/pair-res.csv"
 # Voltage tests at several loads: the augmented baseline, held out by load segment; clean data.
 check "diagnose voltage tests (clean) names none" 0 '"cause": "none"' -- "$bin" diagnose "$src/examples/data/voltage-8loads.csv" --json
 "$bin" diagnose "$src/examples/data/voltage-8loads.csv" >"$work/v8.txt" 2>&1

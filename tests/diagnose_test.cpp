@@ -1096,6 +1096,57 @@ TEST(Diagnose, ADriftThatSettlesIsFittedAsOne) {
   EXPECT_GT(2 * settling, static_cast<int>(std::size(cases))) << report;
 }
 
+// Where the model fails, per reading (Diagnosis::baseline_prediction, heldout_fold,
+// identified; what `scpkit diagnose --residuals` writes): the readings with a prediction are
+// the scored ones, each in a fold that was held out, and their RMS residual, recomputed here
+// over the output's range, is the reported held-out E_RMS. On a drift the named extension's
+// per-reading prediction gives its reported E_RMS after on the same readings. A load test held
+// out by cycles and a voltage test held out by load segment.
+TEST(Diagnose, PerReadingPredictionsGiveTheReportedErrors) {
+  SCPKIT_SKIP_UNDER_SANITIZERS();
+  for (const auto& [side, effect, index] :
+       {std::tuple{"load", "drift", 1}, std::tuple{"voltage", "none", 0}}) {
+    const testing::Scenario s = make_scenario(side, effect, index);
+    const DiagnoseData data = testing::scenario_data(s);
+    DiagnoseOptions o;
+    o.seed = s.spec.seed;
+    const Diagnosis d = diagnose(data, o);
+    const std::size_t n = data.output.size();
+    ASSERT_EQ(d.baseline_prediction.size(), n) << s.describe();
+    ASSERT_EQ(d.heldout_fold.size(), n) << s.describe();
+    ASSERT_EQ(d.identified.size(), n) << s.describe();
+    const auto [lo, hi] = std::minmax_element(data.output.begin(), data.output.end());
+    auto rms_pct = [&](const std::vector<double>& pred) {
+      double ss = 0.0;
+      std::size_t count = 0;
+      for (std::size_t t = 0; t < n; ++t) {
+        if (!std::isfinite(d.baseline_prediction[t])) continue;
+        ss += (data.output[t] - pred[t]) * (data.output[t] - pred[t]);
+        ++count;
+      }
+      return 100.0 * std::sqrt(ss / static_cast<double>(count)) / (*hi - *lo);
+    };
+    std::size_t scored = 0;
+    for (std::size_t t = 0; t < n; ++t) {
+      if (!std::isfinite(d.baseline_prediction[t])) continue;
+      ++scored;
+      EXPECT_GE(d.heldout_fold[t], 0) << t;
+      EXPECT_LT(d.heldout_fold[t], d.heldout_folds) << t;
+    }
+    EXPECT_EQ(scored, d.heldout_rows) << s.describe();
+    EXPECT_NEAR(rms_pct(d.baseline_prediction), d.rms_pct_range, 1e-9 * d.rms_pct_range)
+        << s.describe();
+    EXPECT_EQ(d.cause, effect) << s.describe();
+    if (d.cause == "drift") {
+      const Finding& f = finding(d, "drift");
+      ASSERT_EQ(f.heldout_prediction.size(), n);
+      EXPECT_NEAR(rms_pct(f.heldout_prediction), f.heldout_rms_after, 1e-9 * f.heldout_rms_after)
+          << s.describe();
+      EXPECT_LT(f.heldout_rms_after, d.rms_pct_range) << s.describe();
+    }
+  }
+}
+
 // A file without a clock: the readings' times come from dwell_s (time held at the input before
 // the reading). On rig files, which hold both, they reproduce time_s exactly, with readings
 // during holds, varied holds, and load changes on voltage tests.

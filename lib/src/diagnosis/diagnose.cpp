@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <optional>
 
@@ -192,6 +193,11 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   d.identified_rows = identified_rows.size();
   d.identified_sustained_rms_pct_range = sustained_rms_pct(ctx, identified_rows);
   d.protocol_limits = protocol_limits_of(data);
+  d.baseline_prediction.assign(rec.size(), std::numeric_limits<double>::quiet_NaN());
+  for (std::size_t t : ctx.scored) d.baseline_prediction[t] = ctx.oof[t];
+  d.heldout_fold.resize(rec.size());
+  for (std::size_t t = 0; t < rec.size(); ++t) d.heldout_fold[t] = std::max(rec.fold[t], -1);
+  d.identified = ctx.identified;
 
   d.findings.push_back(detect_lonely_stroke(ctx));
   d.findings.push_back(detect_creep(ctx));

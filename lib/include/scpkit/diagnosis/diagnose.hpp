@@ -75,6 +75,13 @@ struct Diagnosis {
   /// memory observed in training), and their sustained E_RMS: `unexplained` needs both.
   std::size_t identified_rows = 0;
   double identified_sustained_rms_pct_range = 0.0;
+  /// Per reading, in the data's order: the baseline's held-out prediction, NaN where the
+  /// reading was not scored (never held out, only driving the memory, or beyond the inputs its
+  /// fold's training spanned); the fold that held it out (0-based, -1 where none); whether that
+  /// fold's training identified its memory. `scpkit diagnose --residuals` writes them.
+  std::vector<double> baseline_prediction;
+  std::vector<int> heldout_fold;
+  std::vector<char> identified;
   std::vector<Finding> findings;
   std::string cause = "none";
   std::string cause_note;  ///< why `none` or `unexplained`, where it is not plain
