@@ -34,7 +34,8 @@ constexpr const char* kAbout =
     "--json prints the SPEC's object. --residuals writes, beside the file's own columns, where\n"
     "the model fails: each reading's held-out fold, the baseline's held-out prediction and\n"
     "residual, and the named cause's extended model (in the response column's units; blank\n"
-    "where a reading was not scored). --threads only changes the time the diagnosis takes.";
+    "where a reading was not scored), and the readings the spike screen flagged (outlier 1).\n"
+    "--threads only changes the time the diagnosis takes.";
 
 // The ply-mapping diagnosis of a paired thread/SCP test.
 int run_ply_mapping(const Measurement& m, const po::variables_map& vm) {
@@ -138,7 +139,8 @@ int run_ply_mapping(const Measurement& m, const po::variables_map& vm) {
 
 // The file's own columns and, per reading, where the model fails: the fold that held it out,
 // whether its training identified its memory, the baseline's held-out prediction and residual,
-// and the named cause's extended model and its residual, in the response column's units.
+// the named cause's extended model and its residual (in the response column's units; blank
+// where the reading was not scored), and whether the spike screen flagged it.
 std::string residuals_csv(const Measurement& m, const Signal& out, const Diagnosis& d) {
   const MeasurementColumn* col = nullptr;
   for (const auto& c : m.columns()) {
@@ -149,8 +151,10 @@ std::string residuals_csv(const Measurement& m, const Signal& out, const Diagnos
     return col ? to_column_units(canonical, *col, length_mm, out.name) : canonical;
   };
   const Finding* cause = nullptr;
+  const std::vector<char>* spikes = nullptr;
   for (const Finding& f : d.findings) {
     if (f.effect == d.cause && !f.heldout_prediction.empty()) cause = &f;
+    if (f.effect == "outliers" && !f.flagged.empty()) spikes = &f.flagged;
   }
   std::ostringstream csv;
   for (const auto& c : m.columns()) csv << csv_field(c.name) << ",";
@@ -158,21 +162,21 @@ std::string residuals_csv(const Measurement& m, const Signal& out, const Diagnos
   if (cause)
     csv << "," << cause->effect << "_" << out.column << "," << cause->effect << "_residual_"
         << out.column;
-  csv << "\n";
+  csv << ",outlier\n";
   for (std::size_t r = 0; r < m.rows(); ++r) {
     for (const auto& c : m.columns()) csv << csv_field(m.cell(r, c.position)) << ",";
     const double base = d.baseline_prediction[r];
-    if (!std::isfinite(base)) {
-      csv << (cause ? ",,,,," : ",,,") << "\n";
-      continue;
+    if (std::isfinite(base)) {
+      csv << d.heldout_fold[r] + 1 << "," << (d.identified[r] ? 1 : 0) << ","
+          << csv_number(units(base)) << "," << csv_number(units(out.values[r] - base));
+      if (cause) {
+        const double ext = cause->heldout_prediction[r];
+        csv << "," << csv_number(units(ext)) << "," << csv_number(units(out.values[r] - ext));
+      }
+    } else {
+      csv << (cause ? ",,,,," : ",,,");
     }
-    csv << d.heldout_fold[r] + 1 << "," << (d.identified[r] ? 1 : 0) << ","
-        << csv_number(units(base)) << "," << csv_number(units(out.values[r] - base));
-    if (cause) {
-      const double ext = cause->heldout_prediction[r];
-      csv << "," << csv_number(units(ext)) << "," << csv_number(units(out.values[r] - ext));
-    }
-    csv << "\n";
+    csv << "," << (spikes && (*spikes)[r] ? 1 : 0) << "\n";
   }
   return csv.str();
 }

@@ -218,6 +218,26 @@ assert all(r['heldout_fold'] in [str(k) for k in range(1, d['baseline']['heldout
            for r in rows if r['baseline_' + resp] != '')" \
     "$work/drift.csv" "$work/drift-res.csv" "$work/drift-r.json"
 fi
+# The spike screen's flags: a rig record with spikes against the same seed's run without them
+# (the noise differs by a sensor step at most, a spike by at least 10 % of the range).
+printf 'specimen = "thread"\nseed = 12\n[effects]\noutliers = 0.1\n' >"$work/spikes.toml"
+printf 'specimen = "thread"\nseed = 12\n' >"$work/nospikes.toml"
+"$bin" simulate "$work/spikes.toml" -o "$work/spikes.csv" >/dev/null
+"$bin" simulate "$work/nospikes.toml" -o "$work/nospikes.csv" >/dev/null
+check "diagnose names the rig's spikes" 0 '"cause": "outliers"' -- "$bin" diagnose "$work/spikes.csv" --json --residuals "$work/spikes-res.csv"
+if command -v python3 >/dev/null; then
+  assert "diagnose --residuals: the readings flagged outlier are the spikes" python3 -c "
+import csv, sys
+def rows(path):
+    return list(csv.DictReader(l for l in open(path) if not l.startswith('#')))
+a, b, res = rows(sys.argv[1]), rows(sys.argv[2]), rows(sys.argv[3])
+y = [float(r['disp_mm']) for r in b]
+rng = max(y) - min(y)
+spikes = {i for i, (p, q) in enumerate(zip(a, b)) if abs(float(p['disp_mm']) - float(q['disp_mm'])) > 0.05 * rng}
+flagged = {i for i, r in enumerate(res) if r['outlier'] == '1'}
+assert spikes and flagged == spikes, (sorted(spikes), sorted(flagged))" \
+    "$work/spikes.csv" "$work/nospikes.csv" "$work/spikes-res.csv"
+fi
 check "diagnose --residuals into a missing folder is an error naming it" 3 "no/such/r.csv" -- "$bin" diagnose "$work/drift.csv" --residuals "$work/no/such/r.csv"
 assert "diagnose --residuals writes nothing on an error" test ! -e "$work/no/such/r.csv"
 check "diagnose --residuals on a paired file is a usage error" 2 "--residuals is for a test" -- "$bin" diagnose "$ex/pair-4ply.csv" --residuals "$work/pair-res.csv"

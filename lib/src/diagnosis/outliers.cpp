@@ -694,6 +694,7 @@ Finding detect_outliers(Context& ctx) {
                                                       : f.gain_pct >= ctx.opt.min_gain_pct &&
                                                             gain_p < ctx.opt.gain_alpha);
   f.detected = count > 0 && f.p_value < ctx.opt.alpha && gains;
+  if (count > 0) f.flagged = flagged;
   f.evidence = fmt::format(
       "{} reading(s) stand more than {:g} robust sigmas off their neighbours (largest {:.1f}), "
       "or more than {:g} off them and {:g} off the readings at the same point of the protocol "

@@ -53,6 +53,9 @@ struct Finding {
   /// (the first fold's fit) where never held out, the baseline's elsewhere; empty when no
   /// extension was fitted.
   std::vector<double> heldout_prediction;
+  /// The readings the finding singles out, 1 each (outliers: those the spike screen flagged,
+  /// named or not); empty for the other effects and where none is.
+  std::vector<char> flagged;
 };
 
 /// An effect the record's protocol keeps from view, and the protocol change that would show it.
