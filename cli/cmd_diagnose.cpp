@@ -293,6 +293,9 @@ int run_diagnose(const std::vector<std::string>& args) {
     std::cout << fmt::format("  protocol hides {}: {}\n", l.effect, l.note);
   std::cout << "  cause: " << d.cause << (d.cause_note.empty() ? "" : " (" + d.cause_note + ")")
             << "\n";
+  if (vm.count("residuals"))
+    std::cout << "  held-out predictions and residuals per reading written to "
+              << vm["residuals"].as<std::string>() << "\n";
   return kOk;
 }
 

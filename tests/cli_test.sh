@@ -238,6 +238,8 @@ flagged = {i for i, r in enumerate(res) if r['outlier'] == '1'}
 assert spikes and flagged == spikes, (sorted(spikes), sorted(flagged))" \
     "$work/spikes.csv" "$work/nospikes.csv" "$work/spikes-res.csv"
 fi
+check "diagnose --residuals: the report says where it wrote" 0 "residuals per reading written to .*spikes-res2.csv" -- "$bin" diagnose "$work/spikes.csv" --residuals "$work/spikes-res2.csv"
+assert "diagnose --residuals: the same file with and without --json" cmp -s "$work/spikes-res.csv" "$work/spikes-res2.csv"
 check "diagnose --residuals into a missing folder is an error naming it" 3 "no/such/r.csv" -- "$bin" diagnose "$work/drift.csv" --residuals "$work/no/such/r.csv"
 assert "diagnose --residuals writes nothing on an error" test ! -e "$work/no/such/r.csv"
 check "diagnose --residuals on a paired file is a usage error" 2 "--residuals is for a test" -- "$bin" diagnose "$ex/pair-4ply.csv" --residuals "$work/pair-res.csv"
