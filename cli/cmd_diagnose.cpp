@@ -142,10 +142,7 @@ int run_ply_mapping(const Measurement& m, const po::variables_map& vm) {
 // the named cause's extended model and its residual (in the response column's units; blank
 // where the reading was not scored), and whether the spike screen flagged it.
 std::string residuals_csv(const Measurement& m, const Signal& out, const Diagnosis& d) {
-  const MeasurementColumn* col = nullptr;
-  for (const auto& c : m.columns()) {
-    if (c.name == out.column) col = &c;
-  }
+  const MeasurementColumn* col = column_named(m, out.column);
   const double length_mm = m.meta_number("length_mm").value_or(1.0);
   auto units = [&](double canonical) {
     return col ? to_column_units(canonical, *col, length_mm, out.name) : canonical;

@@ -100,10 +100,8 @@ int run_fit(const std::vector<std::string>& args) {
   } else {
     throw UsageError("--sign must be +1, -1 or auto");
   }
-  double in_factor = 1.0;
-  for (const auto& c : m.columns()) {
-    if (c.name == in.column) in_factor = c.to_canonical;
-  }
+  const MeasurementColumn* in_col = column_named(m, in.column);
+  const double in_factor = in_col ? in_col->to_canonical : 1.0;
   if (vm.count("lo")) fo.lo = vm["lo"].as<double>() * in_factor;
   if (vm.count("hi")) fo.hi = vm["hi"].as<double>() * in_factor;
   std::string why;

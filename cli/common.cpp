@@ -73,9 +73,7 @@ std::string csv_number(double v) { return fmt::format("{:.8g}", v); }
 
 ResponseColumn find_response(const Measurement& m, const ModelFile& mf) {
   ResponseColumn r;
-  for (const auto& c : m.columns()) {
-    if (c.name == mf.response_column) r.column = &c;
-  }
+  r.column = column_named(m, mf.response_column);
   if (r.column) {
     r.signal = Signal{mf.response, r.column->name, r.column->values};
     if (r.column->quantity == Quantity::kDisplacement && mf.response == "strain") {
@@ -89,9 +87,7 @@ ResponseColumn find_response(const Measurement& m, const ModelFile& mf) {
     if (e.message().find("no response column") == std::string::npos) throw;
     return r;
   }
-  for (const auto& c : m.columns()) {
-    if (c.name == r.signal->column) r.column = &c;
-  }
+  r.column = column_named(m, r.signal->column);
   if (r.signal->name != mf.response) {
     throw InputError(
         m.source(), m.header_line(), 0,
@@ -109,16 +105,20 @@ constexpr Quantity kDrives[] = {Quantity::kVoltage, Quantity::kPower, Quantity::
 
 }  // namespace
 
+const MeasurementColumn* column_named(const Measurement& m, const std::string& name) {
+  for (const MeasurementColumn& c : m.columns()) {
+    if (c.name == name) return &c;
+  }
+  return nullptr;
+}
+
 const MeasurementColumn* augmented_drive(const Measurement& m, const std::string& wanted_input) {
   const MeasurementColumn* load = m.find(Quantity::kLoad);
   if (!load_is_held(m)) return nullptr;
   if (!wanted_input.empty()) {
     const std::string column = select_input(m, wanted_input).column;
     if (column == load->name) return nullptr;
-    for (const MeasurementColumn& c : m.columns()) {
-      if (c.name == column) return &c;
-    }
-    return nullptr;
+    return column_named(m, column);
   }
   for (Quantity q : kDrives) {
     if (column_varies(m.find(q))) return m.find(q);

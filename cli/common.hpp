@@ -82,6 +82,9 @@ struct ModelInputs {
 /// Tests at several constant loads: the drive column (voltage, power, temperature; the one asked
 /// for, else the first that varies in that order) while the load varies held in segments (runs
 /// of readings at one load), unless the user asked for the load as input; else nullptr.
+/// The file's column of that name (names are unique in a file); nullptr when none.
+const MeasurementColumn* column_named(const Measurement& m, const std::string& name);
+
 const MeasurementColumn* augmented_drive(const Measurement& m, const std::string& wanted_input);
 
 /// The input of a model with one input (not augmented_drive's case): the one asked for, else
