@@ -3,7 +3,6 @@
 
 #include <cmath>
 #include <iostream>
-#include <sstream>
 
 #include "commands.hpp"
 #include "common.hpp"
@@ -153,29 +152,32 @@ std::string residuals_csv(const Measurement& m, const Signal& out, const Diagnos
     if (f.effect == d.cause && !f.heldout_prediction.empty()) cause = &f;
     if (f.effect == "outliers" && !f.flagged.empty()) spikes = &f.flagged;
   }
-  std::ostringstream csv;
-  for (const auto& c : m.columns()) csv << csv_field(c.name) << ",";
-  csv << "heldout_fold,identified,baseline_" << out.column << ",residual_" << out.column;
-  if (cause)
-    csv << "," << cause->effect << "_" << out.column << "," << cause->effect << "_residual_"
-        << out.column;
-  csv << ",outlier\n";
-  for (std::size_t r = 0; r < m.rows(); ++r) {
-    for (const auto& c : m.columns()) csv << csv_field(m.cell(r, c.position)) << ",";
-    const double base = d.baseline_prediction[r];
-    if (std::isfinite(base)) {
-      csv << d.heldout_fold[r] + 1 << "," << (d.identified[r] ? 1 : 0) << ","
-          << csv_number(units(base)) << "," << csv_number(units(out.values[r] - base));
-      if (cause) {
-        const double ext = cause->heldout_prediction[r];
-        csv << "," << csv_number(units(ext)) << "," << csv_number(units(out.values[r] - ext));
-      }
-    } else {
-      csv << (cause ? ",,,,," : ",,,");
-    }
-    csv << "," << (spikes && (*spikes)[r] ? 1 : 0) << "\n";
+  std::vector<AppendedColumn> cols = {{"heldout_fold", {}},
+                                      {"identified", {}},
+                                      {"baseline_" + out.column, {}},
+                                      {"residual_" + out.column, {}}};
+  if (cause) {
+    cols.push_back({cause->effect + "_" + out.column, {}});
+    cols.push_back({cause->effect + "_residual_" + out.column, {}});
   }
-  return csv.str();
+  cols.push_back({"outlier", {}});
+  for (std::size_t r = 0; r < m.rows(); ++r) {
+    const double base = d.baseline_prediction[r];
+    const bool scored = std::isfinite(base);
+    std::vector<std::string> cells;
+    cells.push_back(scored ? std::to_string(d.heldout_fold[r] + 1) : "");
+    cells.push_back(scored ? (d.identified[r] ? "1" : "0") : "");
+    cells.push_back(scored ? csv_number(units(base)) : "");
+    cells.push_back(scored ? csv_number(units(out.values[r] - base)) : "");
+    if (cause) {
+      const double ext = cause->heldout_prediction[r];
+      cells.push_back(scored ? csv_number(units(ext)) : "");
+      cells.push_back(scored ? csv_number(units(out.values[r] - ext)) : "");
+    }
+    cells.push_back(spikes && (*spikes)[r] ? "1" : "0");
+    for (std::size_t k = 0; k < cells.size(); ++k) cols[k].cells.push_back(cells[k]);
+  }
+  return csv_with_appended(m, cols);
 }
 
 }  // namespace

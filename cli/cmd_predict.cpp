@@ -2,7 +2,6 @@
 #include <fmt/format.h>
 
 #include <iostream>
-#include <sstream>
 
 #include "commands.hpp"
 #include "common.hpp"
@@ -57,14 +56,10 @@ int run_predict(const std::vector<std::string>& args) {
     }
   }
 
-  std::ostringstream csv;
-  for (const auto& c : m.columns()) csv << csv_field(c.name) << ",";
-  csv << predicted_name << "\n";
-  for (std::size_t r = 0; r < m.rows(); ++r) {
-    for (const auto& c : m.columns()) csv << csv_field(m.cell(r, c.position)) << ",";
-    csv << csv_number(predicted_col[r]) << "\n";
-  }
-  if (vm.count("output")) write_file_atomically(vm["output"].as<std::string>(), csv.str());
+  AppendedColumn predicted{predicted_name, {}};
+  for (double v : predicted_col) predicted.cells.push_back(csv_number(v));
+  const std::string csv = csv_with_appended(m, {predicted});
+  if (vm.count("output")) write_file_atomically(vm["output"].as<std::string>(), csv);
 
   std::optional<ErrorMetrics> err;
   if (measured) {
@@ -82,7 +77,7 @@ int run_predict(const std::vector<std::string>& args) {
     if (vm.count("output")) j["output_file"] = vm["output"].as<std::string>();
     print_json(j);
   } else {
-    if (!vm.count("output")) std::cout << csv.str();
+    if (!vm.count("output")) std::cout << csv;
     // The report goes to stdout only when stdout does not carry the CSV.
     std::ostream& report = vm.count("output") ? std::cout : std::cerr;
     if (err) {

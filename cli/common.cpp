@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <iostream>
+#include <set>
+#include <sstream>
 #include <thread>
 #include <vector>
 
@@ -110,6 +112,39 @@ const MeasurementColumn* column_named(const Measurement& m, const std::string& n
     if (c.name == name) return &c;
   }
   return nullptr;
+}
+
+std::string csv_with_appended(const Measurement& m, const std::vector<AppendedColumn>& appended) {
+  std::set<std::string> taken;
+  std::vector<std::string> header;
+  for (const auto& c : m.columns()) {
+    taken.insert(c.name);
+    header.push_back(c.name);
+  }
+  for (const AppendedColumn& a : appended) {
+    std::string name = a.name;
+    for (int suffix = 2; taken.count(name) != 0; ++suffix)
+      name = a.name + "_" + std::to_string(suffix);
+    taken.insert(name);
+    header.push_back(name);
+  }
+  std::ostringstream csv;
+  for (const auto& [key, value] : m.metadata()) csv << "# " << key << ": " << value << "\n";
+  auto write_row = [&csv](const std::vector<std::string>& fields) {
+    for (std::size_t k = 0; k < fields.size(); ++k) {
+      csv << (k ? "," : "") << csv_field(fields[k]);
+    }
+    csv << "\n";
+  };
+  write_row(header);
+  std::vector<std::string> row;
+  for (std::size_t r = 0; r < m.rows(); ++r) {
+    row.clear();
+    for (const auto& c : m.columns()) row.push_back(m.cell(r, c.position));
+    for (const AppendedColumn& a : appended) row.push_back(a.cells.at(r));
+    write_row(row);
+  }
+  return csv.str();
 }
 
 const MeasurementColumn* augmented_drive(const Measurement& m, const std::string& wanted_input) {

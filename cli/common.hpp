@@ -79,12 +79,24 @@ struct ModelInputs {
   std::vector<char> starts;    ///< empty unless augmented
   std::vector<std::string> warnings;
 };
-/// Tests at several constant loads: the drive column (voltage, power, temperature; the one asked
-/// for, else the first that varies in that order) while the load varies held in segments (runs
-/// of readings at one load), unless the user asked for the load as input; else nullptr.
 /// The file's column of that name (names are unique in a file); nullptr when none.
 const MeasurementColumn* column_named(const Measurement& m, const std::string& name);
 
+/// A column a command writes beside the file's own: its name and one cell per row (blank where
+/// it has no value).
+struct AppendedColumn {
+  std::string name;
+  std::vector<std::string> cells;
+};
+/// The file's metadata (`# key: value`, in key order), columns and rows, its cells echoed as
+/// read, with `appended` after them, so the file reads back as the one it came from. An
+/// appended name the file (or an earlier appended column) already has gets the first free
+/// suffix _2, _3, ..., so no column is lost and every header name is unique.
+std::string csv_with_appended(const Measurement& m, const std::vector<AppendedColumn>& appended);
+
+/// Tests at several constant loads: the drive column (voltage, power, temperature; the one asked
+/// for, else the first that varies in that order) while the load varies held in segments (runs
+/// of readings at one load), unless the user asked for the load as input; else nullptr.
 const MeasurementColumn* augmented_drive(const Measurement& m, const std::string& wanted_input);
 
 /// The input of a model with one input (not augmented_drive's case): the one asked for, else

@@ -65,6 +65,8 @@ fi
 check "predict to file" 0 "predictions written" -- "$bin" predict "$work/m2.json" "$ex/pair-2ply.csv" -o "$work/p.csv"
 assert "predicted column added" grep -q "^time_s,dwell_s,load_g,thread_strain_pct,scp_strain_pct,predicted_thread_strain_pct$" "$work/p.csv"
 check "predict to stdout" 0 "predicted_thread_strain_pct" -- "$bin" predict "$work/m2.json" "$ex/pair-2ply.csv"
+check "predict on its own output" 0 "predictions written" -- "$bin" predict "$work/m2.json" "$work/p.csv" -o "$work/pp.csv"
+assert "predict: a column name the file has gets _2" grep -q "^time_s,dwell_s,load_g,thread_strain_pct,scp_strain_pct,predicted_thread_strain_pct,predicted_thread_strain_pct_2$" "$work/pp.csv"
 check "map 4-ply with data" 0 "corrected Eq. 8" -- "$bin" map "$work/m2.json" --plies 4 --data "$ex/pair-4ply.csv" -o "$work/map4.csv"
 assert "map csv has the band" grep -q "scp_band_lo_strain_pct" "$work/map4.csv"
 check "map without data" 0 "predicted 6-ply SCP major loop" -- "$bin" map "$work/m2.json" --plies 6
@@ -199,7 +201,7 @@ if command -v python3 >/dev/null; then
   assert "diagnose --residuals: one row per reading, the JSON's held-out errors" python3 -c "
 import csv, json, math, sys
 data = [l for l in open(sys.argv[1]) if not l.startswith('#')]
-rows = list(csv.DictReader(open(sys.argv[2])))
+rows = list(csv.DictReader(l for l in open(sys.argv[2]) if not l.startswith('#')))
 d = json.load(open(sys.argv[3]))
 assert len(rows) == len(data) - 1, (len(rows), len(data))
 resp = [c for c in rows[0] if c.startswith('residual_')][0][len('residual_'):]
@@ -240,6 +242,10 @@ assert spikes and flagged == spikes, (sorted(spikes), sorted(flagged))" \
 fi
 check "diagnose --residuals: the report says where it wrote" 0 "residuals per reading written to .*spikes-res2.csv" -- "$bin" diagnose "$work/spikes.csv" --residuals "$work/spikes-res2.csv"
 assert "diagnose --residuals: the same file with and without --json" cmp -s "$work/spikes-res.csv" "$work/spikes-res2.csv"
+# Its own output diagnosed again: the earlier columns are kept, the new ones take a suffix.
+check "diagnose --residuals on its own output" 0 '"cause": "outliers"' -- "$bin" diagnose "$work/spikes-res.csv" --json --residuals "$work/spikes-res3.csv"
+assert "diagnose --residuals keeps the file's metadata (the length that makes disp_mm a strain)" grep -q "^# length_mm: 100$" "$work/spikes-res.csv"
+assert "diagnose --residuals: a name the file has gets _2" grep -q "^time_s,dwell_s,load_g,disp_mm,heldout_fold,identified,baseline_disp_mm,residual_disp_mm,outlier,heldout_fold_2,identified_2,baseline_disp_mm_2,residual_disp_mm_2,outlier_2$" "$work/spikes-res3.csv"
 check "diagnose --residuals into a missing folder is an error naming it" 3 "no/such/r.csv" -- "$bin" diagnose "$work/drift.csv" --residuals "$work/no/such/r.csv"
 assert "diagnose --residuals writes nothing on an error" test ! -e "$work/no/such/r.csv"
 check "diagnose --residuals on a paired file is a usage error" 2 "--residuals is for a test" -- "$bin" diagnose "$ex/pair-4ply.csv" --residuals "$work/pair-res.csv"
