@@ -176,6 +176,10 @@
 # - A settling drift fitted as one (session 53): a fourth-generator settling load drift (seed
 #   5602), the line fitted with the baseline gaining 35.9 % and the Kelvin element 54.2 %, named
 #   `creep` before; the settling trend gains 55.1 %: `drift`.
+# - A drift named by readings in one memory state alone (session 55): a fourth-generator
+#   voltage drift (seed 5950, quadratic, four loads in increasing order, nested loops), the
+#   return-point time signature at z = 32 over 208 comparisons while neither of the drift's
+#   extensions gains: `drift` (`none` before).
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -260,6 +264,7 @@ make_cases d d 1 5000 load-creep
 make_cases d d 1 5101 load-creep
 make_cases b b 1 5101 load-drift
 make_cases d d 1 5602 load-drift
+make_cases d d 1 5950 voltage-drift
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -355,5 +360,6 @@ expect "$work/d/load-creep-5000.csv" creep
 expect "$work/d/load-creep-5101.csv" creep
 expect "$work/b/load-drift-5101.csv" drift
 expect "$work/d/load-drift-5602.csv" drift
+expect "$work/d/voltage-drift-5950.csv" drift
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]
