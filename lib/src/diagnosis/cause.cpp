@@ -348,17 +348,6 @@ void name_by_signature(Context& ctx, Diagnosis& d, const Signs& signs, bool mate
   const bool holds_move = ctx.holds.available && ctx.holds.p_value < opt.alpha;
   const bool noncongruent = ctx.congruency.available && ctx.congruency.p_value < opt.alpha / 10.0 &&
                             ctx.congruency_robust.p_value < opt.alpha / 5.0 && !holds_move;
-  // The loop shape changing with the load, where its extension (a coarse second operator
-  // weighted by the load) gains significantly but less than min_gain_pct: its signature at the
-  // level, the gain at alpha too (intersection-union at alpha: a signature with the gain at
-  // gain_alpha named a clean fourth-generator record of fresh seed 5600 at 0.002 noise, its
-  // held-out error at the floor, the extension gaining 0.84 % at p = 0.033; the fifth
-  // generator's couplings so named had gains at p <= 0.002). The
-  // coarse operator takes up part of a shape change only (measured, session 50: the fifth
-  // generator's envelopes whose steepness changes with the load, signature p = 0.001 and gains
-  // of 1.9-5.0 % at p <= 0.019 on six records named `none`; over 530 voltage records of the
-  // five generators, the clean ones among them, no record of another truth but one creep had
-  // a signature at p <= 0.01 and a positive gain at gain_alpha without being named otherwise).
   // Readings in one memory state within a segment that differ with the time between them (the
   // return-point time signature, model-free) at the level, by at least one reading's noise
   // over the record, where no extension of the drift gains: the offset map's trend needs four
@@ -374,6 +363,17 @@ void name_by_signature(Context& ctx, Diagnosis& d, const Signs& signs, bool mate
   const Signature& in_time = ctx.return_point.time;
   const bool drift_signature = in_time.available && in_time.units >= kMinTimePairs &&
                                in_time.p_value < level && std::abs(in_time.estimate) >= ctx.floor;
+  // The loop shape changing with the load, where its extension (a coarse second operator
+  // weighted by the load) gains significantly but less than min_gain_pct: its signature at the
+  // level, the gain at alpha too (intersection-union at alpha: a signature with the gain at
+  // gain_alpha named a clean fourth-generator record of fresh seed 5600 at 0.002 noise, its
+  // held-out error at the floor, the extension gaining 0.84 % at p = 0.033; the fifth
+  // generator's couplings so named had gains at p <= 0.002). The
+  // coarse operator takes up part of a shape change only (measured, session 50: the fifth
+  // generator's envelopes whose steepness changes with the load, signature p = 0.001 and gains
+  // of 1.9-5.0 % at p <= 0.019 on six records named `none`; over 530 voltage records of the
+  // five generators, the clean ones among them, no record of another truth but one creep had
+  // a signature at p <= 0.01 and a positive gain at gain_alpha without being named otherwise).
   bool coupled = false;
   for (const Finding& f : d.findings) {
     if (f.effect != "load_shape_coupling" || !f.tested) continue;
