@@ -164,18 +164,20 @@ std::string residuals_csv(const Measurement& m, const Signal& out, const Diagnos
   for (std::size_t r = 0; r < m.rows(); ++r) {
     const double base = d.baseline_prediction[r];
     const bool scored = std::isfinite(base);
-    std::vector<std::string> cells;
-    cells.push_back(scored ? std::to_string(d.heldout_fold[r] + 1) : "");
-    cells.push_back(scored ? (d.identified[r] ? "1" : "0") : "");
-    cells.push_back(scored ? csv_number(units(base)) : "");
-    cells.push_back(scored ? csv_number(units(out.values[r] - base)) : "");
+    std::size_t k = 0;  // the next column, in the order above; prediction cells blank unscored
+    auto put = [&](std::string cell, bool blank) {
+      cols[k++].cells.push_back(blank ? std::string() : std::move(cell));
+    };
+    put(std::to_string(d.heldout_fold[r] + 1), !scored);
+    put(d.identified[r] ? "1" : "0", !scored);
+    put(csv_number(units(base)), !scored);
+    put(csv_number(units(out.values[r] - base)), !scored);
     if (cause) {
       const double ext = cause->heldout_prediction[r];
-      cells.push_back(scored ? csv_number(units(ext)) : "");
-      cells.push_back(scored ? csv_number(units(out.values[r] - ext)) : "");
+      put(csv_number(units(ext)), !scored);
+      put(csv_number(units(out.values[r] - ext)), !scored);
     }
-    cells.push_back(spikes && (*spikes)[r] ? "1" : "0");
-    for (std::size_t k = 0; k < cells.size(); ++k) cols[k].cells.push_back(cells[k]);
+    put(spikes && (*spikes)[r] ? "1" : "0", false);
   }
   return csv_with_appended(m, cols);
 }
