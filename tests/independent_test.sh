@@ -188,10 +188,9 @@
 #   3.24): `drift`, as before.
 # - The line fitted with the baseline where the two-stage trend's signature is at alpha but its
 #   gain is too small (session 57): third-generator drifts of random turning points (seeds
-#   6101 and 6120, signature p = 0.008 and 0.005, two-stage gains 9.3 % at p = 0.067 and 3.6
-#   %), the line
-#   fitted with the baseline gaining 71.4 and 31.8 %: `drift` (`unexplained` and `none`
-#   before). The clean record of seed 103 above, which that line would name, stays `none` by
+#   6101 and 6120, signature p = 0.008 and 0.005, two-stage gains 9.3 % at p = 0.067 and
+#   3.6 %), the line fitted with the baseline gaining 71.4 and 31.8 %: `drift` (`unexplained`
+#   and `none` before). The clean record of seed 103 above, which that line would name, stays `none` by
 #   the training residuals' trend.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
