@@ -51,6 +51,10 @@ struct Context {
   /// readings during holds do not move at alpha (detect_creep): known by a gain only, it
   /// competes by gain and yields to a drift seen in time (cause.cpp).
   bool creep_by_gain_only = false;
+  /// A drift detected by its held-out gain with an extension sized inside the load segments
+  /// (detect_drift, tests held out by load segment): a trend no map of the load makes, so an
+  /// offset nonlinearity yields to it (cause.cpp).
+  bool drift_within_segments = false;
   /// Held-out readings whose memory their fold's training identified (identified_readings).
   std::vector<char> identified;
   /// Folds whose training rows chose a lonely-stroke term (detect_lonely_stroke).

@@ -309,7 +309,13 @@ Finding detect_drift(Context& ctx) {
       powers_of_time(1),
       by_segment ? "a trend in time within each load segment" : "a linear trend in time",
       &line_signature);
-  if (by_segment && !(f.gain_pct > map.gain_pct)) f = map;
+  // Whether the reported extension sizes the drift inside the segments (the line about each
+  // segment's mean time, or drift_sized_within_segments), which no map of the load can do.
+  bool within_segments = by_segment;
+  if (by_segment && !(f.gain_pct > map.gain_pct)) {
+    f = map;
+    within_segments = false;
+  }
   // The drift sized inside the training segments (drift_sized_within_segments) where it gains
   // more than both (session 49); its sign-flip test on a stream of its own, so the detectors
   // after it keep their p-values.
@@ -319,8 +325,12 @@ Finding detect_drift(Context& ctx) {
       const OwnStream own(ctx, 17);
       sized = drift_sized_within_segments(ctx);
     }
-    if (sized && sized->gain_pct > f.gain_pct) f = std::move(*sized);
+    if (sized && sized->gain_pct > f.gain_pct) {
+      f = std::move(*sized);
+      within_segments = true;
+    }
   }
+  ctx.drift_within_segments = within_segments && f.detected;
   if (!by_segment) {
     // Records held out by cycles (load tests; tests at one to three loads): a trend that turns
     // or settles as well (PHYSICS.md section 5, "low-order trend in time"). A line fitted on the
