@@ -61,7 +61,8 @@ TEST(ProtocolLimits, FollowTheRigsProtocolOverManyScenarios) {
 
 // Hand-built records: falling loads hide a drift as rising ones do; two loads in three
 // segments are no order; two or three loads each tested once hide a drift across segments,
-// three loads a map beyond quadratic; a record without a clock says nothing of creep
+// three loads a map beyond quadratic, two or three loads with a protocol of their own in each
+// segment a coupling's cause; a record without a clock says nothing of creep
 // (diagnose does not test creep there and says so).
 TEST(ProtocolLimits, LoadOrderClockAndHolds) {
   auto voltage_test = [](const std::vector<double>& loads_N) {
@@ -104,6 +105,22 @@ TEST(ProtocolLimits, LoadOrderClockAndHolds) {
   DiagnoseData held = voltage_test({0.5, 0.9, 0.3, 0.7});
   held.input[5] = held.input[4];  // two readings in one hold
   EXPECT_TRUE(protocol_limits_of(held).empty());
+
+  // Two or three loads (held out by cycles) whose segments follow protocols of their own: a
+  // misfit that differs between segments can read as a coupling. Not where every segment
+  // turns at the same inputs, nor at four loads (held out by load).
+  auto own_protocols = [&](const std::vector<double>& loads_N) {
+    DiagnoseData d = voltage_test(loads_N);
+    for (std::size_t t = 12; t < 24; ++t) d.input[t] *= 0.5;  // the second segment turns at 3
+    return d;
+  };
+  EXPECT_EQ(
+      effects_of(protocol_limits_of(own_protocols({0.3, 0.9, 0.5}))),
+      (std::vector<std::string>{"creep", "offset_nonlinearity", "drift", "load_shape_coupling"}));
+  EXPECT_EQ(effects_of(protocol_limits_of(own_protocols({0.9, 0.3}))),
+            (std::vector<std::string>{"creep", "drift", "load_shape_coupling"}));
+  EXPECT_EQ(effects_of(protocol_limits_of(own_protocols({0.5, 0.9, 0.3, 0.7}))),
+            (std::vector<std::string>{"creep"}));
 
   DiagnoseData unclocked = voltage_test({0.3, 0.5, 0.7, 0.9});
   unclocked.time_s.clear();

@@ -22,6 +22,22 @@ bool loads_in_order_of_size(const std::vector<double>& seg_load) {
   return rising || falling;
 }
 
+// Each segment's turning values: the inputs where the input turns (holds skipped), in order.
+std::vector<std::vector<double>> turning_values(const std::vector<double>& u,
+                                                const std::vector<int>& seg, std::size_t segments,
+                                                double tol) {
+  std::vector<std::vector<double>> out(segments);
+  std::vector<int> dir(segments, 0);
+  for (std::size_t t = 1; t < u.size(); ++t) {
+    if (seg[t] != seg[t - 1] || std::abs(u[t] - u[t - 1]) <= tol) continue;
+    const auto s = static_cast<std::size_t>(seg[t]);
+    const int d = u[t] > u[t - 1] ? 1 : -1;
+    if (dir[s] != 0 && d != dir[s]) out[s].push_back(u[t - 1]);
+    dir[s] = d;
+  }
+  return out;
+}
+
 }  // namespace
 
 std::vector<ProtocolLimit> protocol_limits_of(const DiagnoseData& data) {
@@ -101,6 +117,31 @@ std::vector<ProtocolLimit> protocol_limits_of(const DiagnoseData& data) {
                    "record moves each load's offset as a function of the load, which f1 "
                    "absorbs, and only the drift inside each segment shows; test the loads in "
                    "a shuffled order"});
+  }
+
+  // Two or three loads are held out by cycles, so each segment trains the load-shape
+  // coupling's operator that predicts its own held-out cycles; where the segments follow
+  // protocols of their own, a baseline misfit that differs between them (each protocol meets
+  // the grid's cells its own way) looks like a shape changing with the load (measured,
+  // session 58: about 3 of 30 clean fourth-generator records at three loads, each segment's
+  // turning points drawn afresh, named `load_shape_coupling`).
+  if (tested.size() >= 2 && tested.size() <= 3) {
+    const auto [umin, umax] = std::minmax_element(data.input.begin(), data.input.end());
+    const double tol = 1e-3 * std::max(*umax - *umin, 1e-300);
+    const auto turns = turning_values(data.input, seg, seg_load.size(), tol);
+    const auto alike = [tol](const std::vector<double>& a, const std::vector<double>& b) {
+      return a.size() == b.size() &&
+             std::equal(a.begin(), a.end(), b.begin(),
+                        [tol](double x, double y) { return std::abs(x - y) <= 10.0 * tol; });
+    };
+    if (!std::all_of(turns.begin(), turns.end(),
+                     [&](const std::vector<double>& v) { return alike(v, turns.front()); })) {
+      out.push_back({"load_shape_coupling",
+                     "with two or three loads, each held out by its own cycles, and a protocol "
+                     "of its own in each segment, a misfit of the baseline that differs between "
+                     "segments can read as a loop shape changing with the load; run the same "
+                     "protocol at every load, or test at four or more loads"});
+    }
   }
   return out;
 }
