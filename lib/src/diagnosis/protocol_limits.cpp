@@ -123,7 +123,7 @@ std::vector<ProtocolLimit> protocol_limits_of(const DiagnoseData& data) {
   // coupling's operator that predicts its own held-out cycles; where the segments follow
   // protocols of their own, a baseline misfit that differs between them (each protocol meets
   // the grid's cells its own way) looks like a shape changing with the load (measured,
-  // session 58: about 3 of 30 clean fourth-generator records at three loads, each segment's
+  // session 58: 3 of 29 fresh clean fourth-generator records at three loads, each segment's
   // turning points drawn afresh, named `load_shape_coupling`).
   if (tested.size() >= 2 && tested.size() <= 3) {
     const auto [umin, umax] = std::minmax_element(data.input.begin(), data.input.end());
