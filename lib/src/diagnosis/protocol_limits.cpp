@@ -44,6 +44,8 @@ std::vector<ProtocolLimit> protocol_limits_of(const DiagnoseData& data) {
   const std::size_t n = data.input.size();
   std::vector<ProtocolLimit> out;
   if (n < 2) return out;
+  const auto [umin, umax] = std::minmax_element(data.input.begin(), data.input.end());
+  const double span = std::max(*umax - *umin, 1e-300);  // the input's
   std::vector<int> seg(n, 0);
   std::vector<double> seg_load;
   const std::set<double> loads(data.load_N.begin(), data.load_N.end());
@@ -69,8 +71,7 @@ std::vector<ProtocolLimit> protocol_limits_of(const DiagnoseData& data) {
   std::vector<double> time = data.time_s;
   if (time.empty() && !data.dwell_s.empty()) time = reading_times_from_dwell(data);
   if (time.size() == n) {
-    const auto [umin, umax] = std::minmax_element(data.input.begin(), data.input.end());
-    const double utol = 1e-9 * std::max(*umax - *umin, 1e-300);
+    const double utol = 1e-9 * span;
     bool read_during_holds = false;
     double shortest = HUGE_VAL, longest = 0.0;
     for (std::size_t t = 1; t < n; ++t) {
@@ -126,13 +127,12 @@ std::vector<ProtocolLimit> protocol_limits_of(const DiagnoseData& data) {
   // session 58: 3 of 29 fresh clean fourth-generator records at three loads, each segment's
   // turning points drawn afresh, named `load_shape_coupling`).
   if (tested.size() >= 2 && tested.size() <= 3) {
-    const auto [umin, umax] = std::minmax_element(data.input.begin(), data.input.end());
-    const double tol = 1e-3 * std::max(*umax - *umin, 1e-300);
-    const auto turns = turning_values(data.input, seg, seg_load.size(), tol);
-    const auto alike = [tol](const std::vector<double>& a, const std::vector<double>& b) {
+    // Steps below 0.1 % of the span are holds; turning values within 1 % of it are one.
+    const auto turns = turning_values(data.input, seg, seg_load.size(), 1e-3 * span);
+    const auto alike = [span](const std::vector<double>& a, const std::vector<double>& b) {
       return a.size() == b.size() &&
              std::equal(a.begin(), a.end(), b.begin(),
-                        [tol](double x, double y) { return std::abs(x - y) <= 10.0 * tol; });
+                        [span](double x, double y) { return std::abs(x - y) <= 1e-2 * span; });
     };
     if (!std::all_of(turns.begin(), turns.end(),
                      [&](const std::vector<double>& v) { return alike(v, turns.front()); })) {
