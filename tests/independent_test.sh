@@ -201,6 +201,10 @@
 #   warm-up of 11.5 % at seven loads in increasing order (seed 6600), the drift gaining 23.0 % at
 #   p = 0.001, the knee 28.7 %, the time signature p = 0.058: `drift` (`offset_nonlinearity`
 #   before).
+# - Creep read during holds ahead of a lonely stroke's term (session 59): fifth-generator voltage
+#   creeps logarithmic in the time since each step (seeds 7403 and 7409), the running-maximum
+#   term gaining 6.2 and 11.6 %, the Kelvin elements losing, readings during holds moving with
+#   the last step at p = 1e-6 and 1.3e-13: `creep` (`lonely_stroke` before).
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -295,6 +299,8 @@ make_cases c c 1 6120 load-drift
 make_cases b b 1 6600 load-outliers
 make_cases a a 1 5602 load-outliers
 make_cases e e 1 6600 voltage-drift
+make_cases e e 1 7403 voltage-creep
+make_cases e e 1 7409 voltage-creep
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -400,5 +406,7 @@ expect "$work/c/load-drift-6120.csv" drift
 expect "$work/b/load-outliers-6600.csv" outliers
 expect "$work/a/load-outliers-5602.csv" outliers
 expect "$work/e/voltage-drift-6600.csv" drift
+expect "$work/e/voltage-creep-7403.csv" creep
+expect "$work/e/voltage-creep-7409.csv" creep
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]
