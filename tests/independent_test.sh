@@ -205,6 +205,10 @@
 #   creeps logarithmic in the time since each step (seeds 7403 and 7409), the running-maximum
 #   term gaining 6.2 and 11.6 %, the Kelvin elements losing, readings during holds moving with
 #   the last step at p = 1e-6 and 1.3e-13: `creep` (`lonely_stroke` before).
+# - Outliers that gain little behind an extension that gains (session 59): a fourth-generator
+#   voltage creep (seed 7411, removing one flagged reading +0.2 %, the carried lag +34.3 %) and
+#   a three-load coupling (seed 7116, +0.7 % against +16.8 %): `creep` and
+#   `load_shape_coupling` (`outliers` before).
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -301,6 +305,8 @@ make_cases a a 1 5602 load-outliers
 make_cases e e 1 6600 voltage-drift
 make_cases e e 1 7403 voltage-creep
 make_cases e e 1 7409 voltage-creep
+make_cases d d 1 7411 voltage-creep
+make_cases d d 1 7116 voltage-load_shape_coupling
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -408,5 +414,7 @@ expect "$work/a/load-outliers-5602.csv" outliers
 expect "$work/e/voltage-drift-6600.csv" drift
 expect "$work/e/voltage-creep-7403.csv" creep
 expect "$work/e/voltage-creep-7409.csv" creep
+expect "$work/d/voltage-creep-7411.csv" creep
+expect "$work/d/voltage-load_shape_coupling-7116.csv" load_shape_coupling
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]
