@@ -80,9 +80,16 @@ int main(int argc, char** argv) {
     if (!dump.empty()) {
       for (const std::string& e : effects) {
         if (!only_effect.empty() && e != only_effect) continue;
-        for (int k = offset; k < offset + cases; ++k)
-          std::ofstream(fmt::format("{}/{}-{}-{}.csv", dump, side, e, k))
-              << testing::scenario_csv(testing::make_scenario(side, e, k));
+        for (int k = offset; k < offset + cases; ++k) {
+          const std::string path = fmt::format("{}/{}-{}-{}.csv", dump, side, e, k);
+          std::ofstream file(path);
+          file << testing::scenario_csv(testing::make_scenario(side, e, k));
+          if (!file) {
+            std::cerr << "diagnose_confusion: cannot write " << path
+                      << " (does the --dump directory exist?)\n";
+            return 1;
+          }
+        }
       }
       continue;
     }
