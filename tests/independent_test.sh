@@ -209,6 +209,10 @@
 #   voltage creep (seed 7411, removing one flagged reading +0.2 %, the carried lag +34.3 %) and
 #   a three-load coupling (seed 7116, +0.7 % against +16.8 %): `creep` and
 #   `load_shape_coupling` (`outliers` before).
+# - A coupling behind the lonely stroke's offset across loads (session 59): a fifth-generator
+#   lonely stroke at six loads (seed 7409), readings in one memory state before and after each
+#   first rise at z = -10, the coupling operator detected: `lonely_stroke`
+#   (`load_shape_coupling` before).
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -307,6 +311,7 @@ make_cases e e 1 7403 voltage-creep
 make_cases e e 1 7409 voltage-creep
 make_cases d d 1 7411 voltage-creep
 make_cases d d 1 7116 voltage-load_shape_coupling
+make_cases e e 1 7409 voltage-lonely_stroke
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -416,5 +421,6 @@ expect "$work/e/voltage-creep-7403.csv" creep
 expect "$work/e/voltage-creep-7409.csv" creep
 expect "$work/d/voltage-creep-7411.csv" creep
 expect "$work/d/voltage-load_shape_coupling-7116.csv" load_shape_coupling
+expect "$work/e/voltage-lonely_stroke-7409.csv" lonely_stroke
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]
