@@ -91,6 +91,20 @@ Signs read_signs(const Context& ctx) {
   return signs;
 }
 
+/// Names `effect` by its signature alone, `why` its extension's gain does not (appended to the
+/// finding's evidence).
+void name_by_signature_alone(Diagnosis& d, const std::string& effect, const std::string& why) {
+  for (Finding& f : d.findings) {
+    if (f.effect != effect || !f.tested) continue;
+    f.detected = true;
+    f.evidence += "; named by this signature alone: " + why;
+    d.cause = f.effect;
+    // The note explains `none` and `unexplained` ("no named effect explains it"); a named
+    // cause carries its reason in its finding, as when named by its extension's gain.
+    d.cause_note.clear();
+  }
+}
+
 /// The detected finding that names the cause by the evidence for it and its extension's
 /// held-out gain; nullptr where none is detected.
 const Finding* named_by_extension(const Context& ctx, const Diagnosis& d, const Signs& signs,
@@ -281,15 +295,7 @@ void name_by_signature(Context& ctx, Diagnosis& d, const Signs& signs, bool mate
   const auto& rp = ctx.return_point.running_max;
   const double level = material ? opt.alpha : opt.alpha / 10.0;
   auto name_by_signature = [&](const std::string& effect, const std::string& why) {
-    for (Finding& f : d.findings) {
-      if (f.effect != effect || !f.tested) continue;
-      f.detected = true;
-      f.evidence += "; named by this signature alone: " + why;
-      d.cause = f.effect;
-      // The note explains `none` and `unexplained` ("no named effect explains it"); a named
-      // cause carries its reason in its finding, as when named by its extension's gain.
-      d.cause_note.clear();
-    }
+    name_by_signature_alone(d, effect, why);
   };
   // The offset must also be as large as one reading's noise: the return-point test's variance
   // is estimated, and on a clean record of the independent generator (0.002 mm noise) an offset
@@ -446,16 +452,12 @@ void name_by_signature(Context& ctx, Diagnosis& d, const Signs& signs, bool mate
 /// on 160 clean records before).
 void creep_ahead_of_lonely(const Context& ctx, Diagnosis& d) {
   if (!ctx.holds.available || !(ctx.holds.p_value < ctx.opt.alpha / 10.0)) return;
-  for (Finding& f : d.findings) {
-    if (f.effect != "creep" || !f.tested) continue;
-    f.detected = true;
-    f.evidence +=
-        "; named by this signature ahead of the lonely stroke's term: readings during holds "
-        "move in the direction of the last input step, which no rate-independent effect (the "
-        "lonely stroke is one) makes them do, while creep slower than the holds also makes the "
-        "first rise differ from the later cycles";
-    d.cause = f.effect;
-  }
+  name_by_signature_alone(
+      d, "creep",
+      "ahead of the lonely stroke's term, since readings during holds move in the direction of "
+      "the last input step, which no rate-independent effect (the lonely stroke is one) makes "
+      "them do, while creep slower than the holds also makes the first rise differ from the "
+      "later cycles");
 }
 
 }  // namespace
