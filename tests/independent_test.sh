@@ -213,6 +213,15 @@
 #   lonely stroke at six loads (seed 7409), readings in one memory state before and after each
 #   first rise at z = -10, the coupling operator detected: `lonely_stroke`
 #   (`load_shape_coupling` before).
+# - Session 60: a burst of two just before a return to zero load, its far edge met by several
+#   passes (fourth generator, load outliers, seed 7601, 9.3 and 8.6 scales): `outliers` (`none`
+#   before); a noise-free-congruent clean record whose interpolated pairs vary with the relays'
+#   steps (fourth generator, load, seed 7601, congruency p = 0.0007 pooled): `none`
+#   (`minor_loop_noncongruence` before); a fifth-generator voltage creep (seed 7601) named by a
+#   trend's gain of 1.0 % while readings during holds move with the last step at p = 0.0002:
+#   `creep` (`drift` before); a second-generator voltage drift saturating over the record (seed
+#   7600), which the running-maximum columns took up beside a time column alone (p = 5.4e-5):
+#   `drift` (`lonely_stroke` before).
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -312,6 +321,10 @@ make_cases e e 1 7409 voltage-creep
 make_cases d d 1 7411 voltage-creep
 make_cases d d 1 7116 voltage-load_shape_coupling
 make_cases e e 1 7409 voltage-lonely_stroke
+make_cases d d 1 7601 load-outliers
+make_cases d d 1 7601 load-none
+make_cases e e 1 7601 voltage-creep
+make_cases b b 1 7600 voltage-drift
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -422,5 +435,9 @@ expect "$work/e/voltage-creep-7409.csv" creep
 expect "$work/d/voltage-creep-7411.csv" creep
 expect "$work/d/voltage-load_shape_coupling-7116.csv" load_shape_coupling
 expect "$work/e/voltage-lonely_stroke-7409.csv" lonely_stroke
+expect "$work/d/load-outliers-7601.csv" outliers
+expect "$work/d/load-none-7601.csv" none
+expect "$work/e/voltage-creep-7601.csv" creep
+expect "$work/b/voltage-drift-7600.csv" drift
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]

@@ -282,7 +282,11 @@ constexpr double kRamp = 8.0;
 /// with its neighbours), and so do the ramp and protocol-point tiers that ask a reading to
 /// stand alone. No other reading at a run reading's point may share its deviation
 /// (ProtocolPoints::shared); where one pass only meets the run, the run may be in that pass
-/// (it mirrors the run in dev), and the rougher of the two holds the burst.
+/// (it mirrors the run in dev), and the rougher of the two holds the burst. An edge met by
+/// several passes (a return to the record's bottom) needs only to be at its point (measured,
+/// session 60: a fresh fourth-generator staircase of 49 readings, a burst of two at 9.3 and
+/// 8.6 scales just before a return to zero load, named `none` while the edge had to be met by
+/// that one pass alone).
 /// Every reading read once per hold is judged, the first rise of a load test too: the
 /// comparison is on the readings themselves. Returns each run reading's smallest deviation in the
 /// run, in scales.
@@ -331,10 +335,17 @@ std::vector<double> burst_scores(const Record& rec, const std::vector<double>& d
     for (std::size_t t = a - 1; t <= b; ++t) one_other = one_other || alike.others(t) == 1;
     if (one_other) {
       bool consecutive = true;
-      for (std::size_t t = a - 1; t < b; ++t)
+      for (std::size_t t = a; t + 1 < b; ++t)
         consecutive = consecutive && alike.others(t) == 1 && alike.others(t + 1) == 1 &&
                       alike.twin(t) + 1 == alike.twin(t + 1);
-      if (!consecutive || rough(a - 1, b) <= rough(alike.twin(a - 1), alike.twin(b))) continue;
+      consecutive = consecutive && alike.others(a) == 1 && alike.others(b - 1) == 1;
+      // An edge met by that pass alone must be its neighbour there; an edge met by several
+      // passes (a return to the record's bottom) is at its point already (quiet).
+      const std::size_t first = alike.twin(a), last = alike.twin(b - 1);
+      consecutive = consecutive && first > 0 && last + 1 < n &&
+                    (alike.others(a - 1) != 1 || alike.twin(a - 1) + 1 == first) &&
+                    (alike.others(b) != 1 || alike.twin(b) == last + 1);
+      if (!consecutive || rough(a - 1, b) <= rough(first - 1, last + 1)) continue;
     }
     for (std::size_t t = a; t < b; ++t) out[t] = lo / scale;
   }
