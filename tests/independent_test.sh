@@ -221,9 +221,7 @@
 #   trend's gain of 1.0 % while readings during holds move with the last step at p = 0.0002:
 #   `creep` (`drift` before); a second-generator voltage drift saturating over the record (seed
 #   7600), which the running-maximum columns took up beside a time column alone (p = 5.4e-5):
-#   `drift` (`lonely_stroke` before); a first-generator non-congruence (seed 7600), congruency
-#   p = 8e-19, named by a Kelvin element's gain alone (20.6 % at p = 0.006):
-#   `minor_loop_noncongruence` (`creep` before).
+#   `drift` (`lonely_stroke` before).
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -327,7 +325,6 @@ make_cases d d 1 7601 load-outliers
 make_cases d d 1 7601 load-none
 make_cases e e 1 7601 voltage-creep
 make_cases b b 1 7600 voltage-drift
-make_cases a a 1 7600 load-minor_loop_noncongruence
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -442,6 +439,5 @@ expect "$work/d/load-outliers-7601.csv" outliers
 expect "$work/d/load-none-7601.csv" none
 expect "$work/e/voltage-creep-7601.csv" creep
 expect "$work/b/voltage-drift-7600.csv" drift
-expect "$work/a/load-minor_loop_noncongruence-7600.csv" minor_loop_noncongruence
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]

@@ -216,17 +216,6 @@ const Finding* named_by_extension(const Context& ctx, const Diagnosis& d, const 
     // the record, read twice per 10 s hold, element at tau 245 s gaining 73.1 % against the
     // backfitted trend's 50.0 %, time signature p = 1e-20; session 46).
     if (&f == creep && ctx.creep_by_gain_only && drift_seen) continue;
-    // And, known by its gain alone, ahead of minor loops between the same extrema that differ by
-    // history far beyond what creep makes them do (the congruency test at alpha / 1000, its
-    // spike-robust reading at alpha / 10; measured, session 60: a fresh first-generator
-    // non-congruence, seed 7600, raw p = 8e-19, named `creep` by a Kelvin element gaining
-    // 20.6 % on the identified readings at p = 0.006; the smallest raw p over the creep records
-    // of the session's sets was 0.0059, over 24 rig load creeps 0.00042, a creep seen during
-    // holds).
-    if (&f == creep && !creep_seen && ctx.congruency.available &&
-        ctx.congruency.p_value < opt.alpha / 1000.0 &&
-        ctx.congruency_robust.p_value < opt.alpha / 10.0)
-      continue;
     const double gain = compared_gain(f);
     if (!by_gain || gain > by_gain_pct) {
       by_gain = &f;
