@@ -335,10 +335,9 @@ std::vector<double> burst_scores(const Record& rec, const std::vector<double>& d
     for (std::size_t t = a - 1; t <= b; ++t) one_other = one_other || alike.others(t) == 1;
     if (one_other) {
       bool consecutive = true;
-      for (std::size_t t = a; t + 1 < b; ++t)
-        consecutive = consecutive && alike.others(t) == 1 && alike.others(t + 1) == 1 &&
-                      alike.twin(t) + 1 == alike.twin(t + 1);
-      consecutive = consecutive && alike.others(a) == 1 && alike.others(b - 1) == 1;
+      for (std::size_t t = a; t < b; ++t)
+        consecutive = consecutive && alike.others(t) == 1 &&
+                      (t + 1 == b || alike.twin(t) + 1 == alike.twin(t + 1));
       // An edge met by that pass alone must be its neighbour there; an edge met by several
       // passes (a return to the record's bottom) is at its point already (quiet).
       const std::size_t first = alike.twin(a), last = alike.twin(b - 1);

@@ -464,6 +464,15 @@ CongruencySignatures congruency_signatures(const Record& rec) {
   struct Group {
     double explained = 0.0, explained_robust = 0.0, sse = 0.0;
     int terms = 0, pairs = 0, dof = 0;
+    Group& operator+=(const Group& o) {
+      explained += o.explained;
+      explained_robust += o.explained_robust;
+      sse += o.sse;
+      terms += o.terms;
+      pairs += o.pairs;
+      dof += o.dof;
+      return *this;
+    }
   };
   Group groups[2];  // [0] aligned, [1] interpolated
   for (std::size_t q = 0; q < branches.size(); ++q) {
@@ -558,21 +567,18 @@ CongruencySignatures congruency_signatures(const Record& rec) {
   // twice its p (Bonferroni); else the pairs pooled, as one group.
   const bool split = groups[0].dof >= 8 && groups[1].dof >= 8;
   Group pooled = groups[0];
-  pooled.explained += groups[1].explained;
-  pooled.explained_robust += groups[1].explained_robust;
-  pooled.sse += groups[1].sse;
-  pooled.terms += groups[1].terms;
-  pooled.pairs += groups[1].pairs;
-  pooled.dof += groups[1].dof;
+  pooled += groups[1];
   auto combine = [&](Signature& s, bool robust) {
     auto change = [robust](const Group& g) { return robust ? g.explained_robust : g.explained; };
     if (pooled.pairs == 0 || pooled.dof < 8) return;
-    Signature best = test(pooled, change(pooled));
+    Signature best;
     if (split) {
       const Signature a = test(groups[0], change(groups[0]));
       const Signature b = test(groups[1], change(groups[1]));
       best = a.p_value <= b.p_value ? a : b;
       best.p_value = std::min(1.0, 2.0 * best.p_value);
+    } else {
+      best = test(pooled, change(pooled));
     }
     best.what = s.what;
     s = best;
