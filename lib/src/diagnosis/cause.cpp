@@ -247,14 +247,28 @@ bool judge_residuals(Diagnosis& d) {
   const bool beyond = d.sustained_rms_pct_range > threshold;
   const bool material = beyond && d.identified_rows >= kMinIdentified &&
                         d.identified_sustained_rms_pct_range > threshold;
-  d.cause = material ? "unexplained" : "none";
+  // And the identified readings must be a fair part of the held-out ones (a quarter): a few
+  // identified readings among many guessed ones sit beside parts of the plane no training
+  // traversed, and the fit's smoothing and grid carry its guesses there into their prediction
+  // (measured, session 61: clean fifth-generator load records, a 24-level relay grid under a
+  // decaying sine, 10-15 of 136-246 held-out readings identified at E_RMS 1.3-1.9 % against
+  // floors of 0.54-0.61 %: `unexplained`; on about 600 records of every truth nothing else was
+  // `unexplained`). The level the signatures name at (name_by_signature) stays `material`.
+  const bool fair_share = 4 * d.identified_rows >= d.heldout_rows;
+  d.cause = material && fair_share ? "unexplained" : "none";
   // The note says what `unexplained` was judged on, or why a held-out error beyond the floor
   // is not it.
   const std::string on_identified = fmt::format(
       "on the {} of {} held-out readings whose memory their training identified, E_RMS without "
       "the largest 5 % is {:.3f} % of range",
       d.identified_rows, d.heldout_rows, d.identified_sustained_rms_pct_range);
-  if (material)
+  if (material && !fair_share)
+    d.cause_note = fmt::format(
+        "the held-out error beyond the noise floor is mostly the baseline's guess where the other "
+        "folds never traversed the input plane: {}, but they are fewer than a quarter of the "
+        "held-out readings",
+        on_identified);
+  else if (material)
     d.cause_note = fmt::format(
         "the held-out error is structured: {}, above max(2 x floor, {} %), and no named effect "
         "explains it",
