@@ -226,8 +226,8 @@ const Finding* named_by_extension(const Context& ctx, const Diagnosis& d, const 
 }
 
 /// With nothing detected: `unexplained` where the held-out error is material where the
-/// training identified the memory, else `none`, and the note that says why. Returns whether the
-/// error is material.
+/// training identified the memory (on at least a quarter of the held-out readings), else
+/// `none`, and the note that says why. Returns whether the error is material.
 bool judge_residuals(Diagnosis& d) {
   // Residual structure is material when the held-out error exceeds twice the noise floor
   // and 1 % of the range: below that a rate-independent baseline of this size misses clean,
