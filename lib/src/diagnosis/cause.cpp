@@ -13,6 +13,8 @@ namespace scpkit::diagnosis {
 namespace {
 
 constexpr double kMaterialPct = 1.0;  ///< % of range: the least residual error called structure
+/// The least share of the held-out readings that must be identified for `unexplained`.
+constexpr std::size_t kIdentifiedShareDivisor = 4;  // a quarter
 /// Creep known by its gain alone is named over a lonely stroke seen at its return points only
 /// when it gains this many times as much on held-out data.
 constexpr double kCreepOverLonely = 1.25;
@@ -254,7 +256,7 @@ bool judge_residuals(Diagnosis& d) {
   // decaying sine, 10-15 of 136-246 held-out readings identified at E_RMS 1.3-1.9 % against
   // floors of 0.54-0.61 %: `unexplained`; on about 600 records of every truth nothing else was
   // `unexplained`). The level the signatures name at (name_by_signature) stays `material`.
-  const bool fair_share = 4 * d.identified_rows >= d.heldout_rows;
+  const bool fair_share = kIdentifiedShareDivisor * d.identified_rows >= d.heldout_rows;
   d.cause = material && fair_share ? "unexplained" : "none";
   // The note says what `unexplained` was judged on, or why a held-out error beyond the floor
   // is not it.
@@ -262,23 +264,17 @@ bool judge_residuals(Diagnosis& d) {
       "on the {} of {} held-out readings whose memory their training identified, E_RMS without "
       "the largest 5 % is {:.3f} % of range",
       d.identified_rows, d.heldout_rows, d.identified_sustained_rms_pct_range);
-  if (material && !fair_share)
-    d.cause_note = fmt::format(
-        "the held-out error beyond the noise floor is mostly the baseline's guess where the other "
-        "folds never traversed the input plane: {}, but they are fewer than a quarter of the "
-        "held-out readings",
-        on_identified);
-  else if (material)
+  if (material && fair_share)
     d.cause_note = fmt::format(
         "the held-out error is structured: {}, above max(2 x floor, {} %), and no named effect "
         "explains it",
         on_identified, kMaterialPct);
-  else if (beyond && d.identified_rows < kMinIdentified)
+  else if (material || (beyond && d.identified_rows < kMinIdentified))
     d.cause_note = fmt::format(
         "the held-out error beyond the noise floor is the baseline's guess where the other folds "
         "never traversed the input plane: only {} of {} held-out readings have a memory their "
-        "training identified (need {})",
-        d.identified_rows, d.heldout_rows, kMinIdentified);
+        "training identified (need {}, and at least 1/{} of them)",
+        d.identified_rows, d.heldout_rows, kMinIdentified, kIdentifiedShareDivisor);
   else if (beyond)
     d.cause_note = fmt::format(
         "the held-out error beyond the noise floor lies where the other folds never traversed "
