@@ -225,6 +225,10 @@
 # - Session 61: clean fifth-generator load records under a decaying sine (seeds 8008 and 8029),
 #   10 of 136 and 15 of 222 held-out readings identified by their training, at E_RMS 1.4 and
 #   1.3 % against floors of 0.54 and 0.61 %: `none` (`unexplained` before).
+# - Session 62: spikes on a ramp of a response whose curvature (or relay grid's steps) between
+#   neighbours inflates the interpolation's MAD (fifth generator seed 8205, third seed 8114,
+#   load outliers; 14 and 12 noise sigmas; 9.5 and 7.7 MADs of the closer half, 5.9 and 7.7 of
+#   all, where 8 were needed before): `outliers` (`none` before).
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -329,6 +333,8 @@ make_cases d d 1 7601 load-none
 make_cases e e 1 7601 voltage-creep
 make_cases e e 1 8008 load-none
 make_cases e e 1 8029 load-none
+make_cases e e 1 8205 load-outliers
+make_cases c c 1 8114 load-outliers
 make_cases b b 1 7600 voltage-drift
 pass=0
 fail=0
@@ -446,5 +452,7 @@ expect "$work/e/voltage-creep-7601.csv" creep
 expect "$work/b/voltage-drift-7600.csv" drift
 expect "$work/e/load-none-8008.csv" none
 expect "$work/e/load-none-8029.csv" none
+expect "$work/e/load-outliers-8205.csv" outliers
+expect "$work/c/load-outliers-8114.csv" outliers
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]
