@@ -228,7 +228,9 @@
 # - Session 62: spikes on a ramp of a response whose curvature (or relay grid's steps) between
 #   neighbours inflates the interpolation's MAD (fifth generator seed 8205, third seed 8114,
 #   load outliers; 14 and 12 noise sigmas; 9.5 and 7.7 MADs of the closer half, 5.9 and 7.7 of
-#   all, where 8 were needed before): `outliers` (`none` before).
+#   all, where 8 were needed before): `outliers` (`none` before). A spike at a turning value
+#   below the readings either side (fifth generator seed 8219, 11.2 MADs) and two in a row
+#   inside a ramp (third generator seed 8200, 7.9 MADs): `outliers` (`none` before).
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -335,6 +337,8 @@ make_cases e e 1 8008 load-none
 make_cases e e 1 8029 load-none
 make_cases e e 1 8205 load-outliers
 make_cases c c 1 8114 load-outliers
+make_cases e e 1 8219 load-outliers
+make_cases c c 1 8200 load-outliers
 make_cases b b 1 7600 voltage-drift
 pass=0
 fail=0
@@ -454,5 +458,7 @@ expect "$work/e/load-none-8008.csv" none
 expect "$work/e/load-none-8029.csv" none
 expect "$work/e/load-outliers-8205.csv" outliers
 expect "$work/c/load-outliers-8114.csv" outliers
+expect "$work/e/load-outliers-8219.csv" outliers
+expect "$work/c/load-outliers-8200.csv" outliers
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]

@@ -174,6 +174,13 @@ struct OutlierScreen {
   bool stands_out(double alpha) const { return count > 0 && p_value < alpha; }
 };
 OutlierScreen screen_outliers(const Context& ctx);
+/// Spikes that break a monotone branch, judged on the readings alone (load tests; per row, 0
+/// where none): a reading on a ramp outside its neighbours' interval (and off their
+/// interpolation), a reading at a turning value of the input that is not the response's
+/// extreme among its neighbours, a run of two or three readings inside a ramp outside the
+/// interval of the readings either side. In units of the noise along the ramps (outliers.cpp);
+/// nothing within two sensor steps (`resolution`) counts.
+std::vector<double> ramp_scores(const Record& rec, double resolution);
 Finding detect_outliers(Context& ctx);
 
 }  // namespace scpkit::diagnosis
