@@ -230,7 +230,9 @@
 #   load outliers; 14 and 12 noise sigmas; 9.5 and 7.7 MADs of the closer half, 5.9 and 7.7 of
 #   all, where 8 were needed before): `outliers` (`none` before). A spike at a turning value
 #   below the readings either side (fifth generator seed 8219, 11.2 MADs) and two in a row
-#   inside a ramp (third generator seed 8200, 7.9 MADs): `outliers` (`none` before).
+#   inside a ramp (third generator seed 8200, 7.9 MADs): `outliers` (`none` before). A warm-up
+#   under a decaying sine, no memory state met twice (fifth generator seed 8217), the settling
+#   trend tried on the line's signature at gain_alpha (p = 0.024): `drift` (`none` before).
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -339,6 +341,7 @@ make_cases e e 1 8205 load-outliers
 make_cases c c 1 8114 load-outliers
 make_cases e e 1 8219 load-outliers
 make_cases c c 1 8200 load-outliers
+make_cases e e 1 8217 load-drift
 make_cases b b 1 7600 voltage-drift
 pass=0
 fail=0
@@ -460,5 +463,6 @@ expect "$work/e/load-outliers-8205.csv" outliers
 expect "$work/c/load-outliers-8114.csv" outliers
 expect "$work/e/load-outliers-8219.csv" outliers
 expect "$work/c/load-outliers-8200.csv" outliers
+expect "$work/e/load-drift-8217.csv" drift
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]
