@@ -198,11 +198,11 @@ std::vector<double> hold_scores(const Record& rec, const std::vector<double>& pr
 /// does, and does not move a reading outside the interval (measured, session 62, on clean
 /// records: on the fifth independent generator's 24-level relay grids the MAD over every ramp
 /// reading was 1.5-4.5 times the sensor noise, the smaller of the two 0.9-2.8 times; on the
-/// third 0.7-2.1 and 0.6-2.1 times). A
-/// transformation steeper than the reading step puts a reading far off the interpolation but
-/// inside the interval, or outside it by the noise only (measured: Preisach planes with ridges
-/// 0.05-0.09 V wide read every 0.1 V, a reading at the knee of a fall 0.005 above its flat
-/// neighbour and half the fall off the interpolation: 11-125 MADs by the distance alone).
+/// third 0.7-2.1 and 0.6-2.1 times). A transformation steeper than the reading step puts a
+/// reading far off the interpolation but inside the interval, or outside it by the noise only
+/// (measured: Preisach planes with ridges 0.05-0.09 V wide read every 0.1 V, a reading at the
+/// knee of a fall 0.005 above its flat neighbour and half the fall off the interpolation:
+/// 11-125 MADs by the distance alone).
 /// Needs no model, so no misfit of a coarse baseline on a short record hides a spike.
 /// Since session 62 also, scored by how far they break monotonicity alone: a reading at a
 /// turning value of the input that is not the response's extreme among its neighbours (its
@@ -214,15 +214,24 @@ std::vector<double> hold_scores(const Record& rec, const std::vector<double>& pr
 std::vector<double> ramp_scores(const Record& rec, double resolution) {
   const std::size_t n = rec.size();
   std::vector<double> out(n, 0.0), e(n, std::numeric_limits<double>::quiet_NaN()), all;
-  std::vector<std::pair<double, double>> by_gap;  // (neighbours' distance, e)
+  std::vector<std::pair<double, double>> by_gap;             // (neighbours' distance, e)
+  auto one_segment = [&rec](std::size_t a, std::size_t b) {  // readings a..b
+    for (std::size_t t = a; t < b; ++t) {
+      if (rec.seg[t] != rec.seg[t + 1]) return false;
+    }
+    return true;
+  };
+  // The response's direction along the input over the ramps (positive: it rises with it).
+  double direction = 0.0;
   for (std::size_t t = 1; t + 1 < n; ++t) {
-    if (rec.seg[t - 1] != rec.seg[t] || rec.seg[t] != rec.seg[t + 1]) continue;
+    if (!one_segment(t - 1, t + 1)) continue;
     const double a = rec.u[t - 1], b = rec.u[t], c = rec.u[t + 1];
     if (!((a < b && b < c) || (a > b && b > c))) continue;
     const double w = (b - a) / (c - a);
     e[t] = rec.y[t] - ((1.0 - w) * rec.y[t - 1] + w * rec.y[t + 1]);
     all.push_back(e[t]);
     by_gap.emplace_back(std::abs(rec.y[t + 1] - rec.y[t - 1]), e[t]);
+    direction += (rec.y[t + 1] - rec.y[t - 1]) * (c - a);
   }
   if (all.size() < 20) return out;
   const double m = median(all);
@@ -242,19 +251,8 @@ std::vector<double> ramp_scores(const Record& rec, double resolution) {
   auto mark = [&](std::size_t t, double outside) {
     if (outside > 2.0 * resolution) out[t] = std::max(out[t], outside / scale);
   };
-  auto one_segment = [&rec](std::size_t a, std::size_t b) {  // readings a..b
-    for (std::size_t t = a; t < b; ++t) {
-      if (rec.seg[t] != rec.seg[t + 1]) return false;
-    }
-    return true;
-  };
   // At a turning value of the input (both neighbours on one side of it) the response is at an
   // extreme among its neighbours: its highest where the input is, if it rises with the input.
-  double direction = 0.0;
-  for (std::size_t t = 1; t + 1 < n; ++t) {
-    if (!std::isnan(e[t]))
-      direction += (rec.y[t + 1] - rec.y[t - 1]) * (rec.u[t + 1] - rec.u[t - 1]);
-  }
   for (std::size_t t = 1; t + 1 < n; ++t) {
     const double a = rec.u[t - 1], b = rec.u[t], c = rec.u[t + 1];
     const double turn = b > a && b > c ? 1.0 : b < a && b < c ? -1.0 : 0.0;
