@@ -233,6 +233,10 @@
 #   inside a ramp (third generator seed 8200, 7.9 MADs): `outliers` (`none` before). A warm-up
 #   under a decaying sine, no memory state met twice (fifth generator seed 8217), the settling
 #   trend tried on the line's signature at gain_alpha (p = 0.024): `drift` (`none` before).
+# - Session 63: a voltage creep whose lag, carried across the load changes, offsets each
+#   segment's first rise (third generator seed 8403; the return-point offset across loads,
+#   creep gaining 6.2 % at p = 0.010 against the running-maximum term's 2.9 %): `creep`
+#   (`lonely_stroke` by that offset alone before).
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -342,6 +346,7 @@ make_cases c c 1 8114 load-outliers
 make_cases e e 1 8219 load-outliers
 make_cases c c 1 8200 load-outliers
 make_cases e e 1 8217 load-drift
+make_cases c c 1 8403 voltage-creep
 make_cases b b 1 7600 voltage-drift
 pass=0
 fail=0
@@ -464,5 +469,6 @@ expect "$work/c/load-outliers-8114.csv" outliers
 expect "$work/e/load-outliers-8219.csv" outliers
 expect "$work/c/load-outliers-8200.csv" outliers
 expect "$work/e/load-drift-8217.csv" drift
+expect "$work/c/voltage-creep-8403.csv" creep
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]
