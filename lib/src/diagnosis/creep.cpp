@@ -315,7 +315,10 @@ Finding kelvin_creep(Context& ctx) {
   // The detected one is kept, or the one gaining more.
   if (rec.several_loads) {
     Finding g = detect_creep_across_loads(ctx);
-    if (g.detected != f.detected ? g.detected : g.gain_pct > f.gain_pct) f = std::move(g);
+    if (g.detected != f.detected ? g.detected : g.gain_pct > f.gain_pct) {
+      f = std::move(g);
+      ctx.creep_carried = true;
+    }
   }
   if (ctx.dwell.available) {
     f.evidence += fmt::format(

@@ -51,6 +51,9 @@ struct Context {
   /// readings during holds do not move at alpha (detect_creep): known by a gain only, it
   /// competes by gain and yields to a drift seen in time (cause.cpp).
   bool creep_by_gain_only = false;
+  /// The creep finding is the Kelvin element carried across load changes (detect_creep): its
+  /// lag offsets each segment's first rise, as a lonely stroke does (cause.cpp).
+  bool creep_carried = false;
   /// A drift detected by its held-out gain with an extension sized inside the load segments
   /// (detect_drift, tests held out by load segment): a trend no map of the load makes, so an
   /// offset nonlinearity yields to it (cause.cpp).
