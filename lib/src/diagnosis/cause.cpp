@@ -399,11 +399,11 @@ void name_by_signature(Context& ctx, Diagnosis& d, const Signs& signs, bool mate
   // cycles as a lonely stroke does (the response still relaxing from the load before), so that
   // offset across loads is named `creep` where creep's extension gains at gain_alpha, at least
   // min_gain_pct and kCreepOverLonely times what the running-maximum term gains
-  // (intersection-union: the model-free offset, then the extension that explains it). The
-  // carried element only: one restarted at each load does not run on into the next segment's
-  // first rise, and on a fresh third-generator lonely stroke at four loads (seed 2002, offset
-  // z = -33) it gained 54.6 % at p = 0.010 against the term's 9.0 %, whose gain rests on the
-  // few first rises held out by load segment.
+  // (creep_outgains_lonely; intersection-union: the model-free offset, then the extension that
+  // explains it). The carried element only: one restarted at each load does not run on into
+  // the next segment's first rise, and on a fresh third-generator lonely stroke at four loads
+  // (seed 2002, offset z = -33) it gained 54.6 % at p = 0.010 against the term's 9.0 %, whose
+  // gain rests on the few first rises held out by load segment.
   // Measured (session 63): of 74 voltage records named `lonely_stroke` before (seeds
   // 7800-7801, 8300-8303, 8400-8409), four creeps are now `creep` (third generator 8403, 8404
   // and 8408, fourth 8300: creep gaining 6.2-51.1 % at p = 0.010-0.034, the term 2.9-24.1 %)
@@ -418,7 +418,7 @@ void name_by_signature(Context& ctx, Diagnosis& d, const Signs& signs, bool mate
     }
     return creep && ctx.creep_carried && creep->gain_pct >= opt.min_gain_pct &&
            creep->p_value < opt.gain_alpha &&
-           creep->gain_pct > kCreepOverLonely * std::max(lonely ? lonely->gain_pct : 0.0, 0.0);
+           (!lonely || creep_outgains_lonely(ctx, *creep, *lonely));
   };
   // The loop shape changing with the load, where its extension (a coarse second operator
   // weighted by the load) gains significantly but less than min_gain_pct: its signature at the
