@@ -172,7 +172,7 @@ TEST(RampScores, MonotoneBranchesScoreUnderTheNoiseAndBrokenOnesAbove) {
     const std::vector<double> s = ramp_scores(monotone_branches(rng, noise_of(rng), 8, 30), 0.0);
     alarms += *std::max_element(s.begin(), s.end()) >= kRamp;
   }
-  int single = 0, turning = 0, pairs = 0;
+  int single = 0, turning = 0, pairs = 0, outward = 0, outward_tried = 0;
   for (int trial = 0; trial < 200; ++trial) {
     const double noise = noise_of(rng);
     const Record rec = monotone_branches(rng, noise, 40, 80);
@@ -211,6 +211,28 @@ TEST(RampScores, MonotoneBranchesScoreUnderTheNoiseAndBrokenOnesAbove) {
     single += broken({mid});
     turning += broken({top});
     pairs += broken({mid, mid + 1});
+    // A top moved up, the way the input turns: still the highest of its neighbours, but both
+    // its steps longer than any other pass makes over their inputs. Judged where some other
+    // rise spans the step in and some other fall the step out (a pass: readings along which
+    // the input moves one way; the input turns at every top and bottom).
+    auto spanned = [&](double lo, double hi, bool rising) {
+      for (std::size_t s = 0; s + 1 < n;) {
+        std::size_t e = s;
+        while (e + 1 < n && up(e) == rising) ++e;
+        const bool other = !(s <= top && top <= e);
+        if (e > s && other && std::min(rec.u[s], rec.u[e]) <= lo &&
+            std::max(rec.u[s], rec.u[e]) >= hi)
+          return true;
+        s = std::max(e, s + 1);
+      }
+      return false;
+    };
+    if (spanned(rec.u[top - 1], rec.u[top], true) && spanned(rec.u[top + 1], rec.u[top], false)) {
+      Record spiked = rec;
+      spiked.y[top] += move;
+      ++outward_tried;
+      outward += ramp_scores(spiked, 0.0)[top] > kRamp;
+    }
   }
   // Gaussian noise reaches kRamp now and then at a flat top (a reading 3 sigmas low beside one
   // 4 sigmas high after the turn): measured, 1 of the 5400 clean records of seeds 1-8 and 62.
@@ -218,6 +240,8 @@ TEST(RampScores, MonotoneBranchesScoreUnderTheNoiseAndBrokenOnesAbove) {
   EXPECT_EQ(single, 200);
   EXPECT_EQ(turning, 200);
   EXPECT_EQ(pairs, 200);
+  EXPECT_GE(outward_tried, 100);
+  EXPECT_EQ(outward, outward_tried);
 }
 
 // Minor loops 0.35 <-> 0.7 from two histories (after the maximum, and from the minimum), twice:
