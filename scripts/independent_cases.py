@@ -2,7 +2,7 @@
 """Test files for `scpkit diagnose` from a generator independent of the project's rig.
 
 Usage: scripts/independent_cases.py OUT_DIR N [FIRST [SIDE-EFFECT]] [--once-per-hold]
-[--ar-noise RHO] [--one-load] [--cells N] [--random-turns]   (N files per effect and side, seeds FIRST..FIRST+N-1; file names
+[--ar-noise RHO] [--one-load] [--cells N] [--random-turns] [--noise-free]   (N files per effect and side, seeds FIRST..FIRST+N-1; file names
 SIDE-EFFECT-I.csv carry the truth; SIDE-EFFECT, e.g. load-none, makes that kind only, with the
 same seeds; --once-per-hold reads voltage creep once per hold instead of three times;
 --ar-noise RHO makes the sensor noise AR(1) with lag-one correlation RHO; --one-load tests
@@ -57,6 +57,12 @@ class Sensor:
 
 def quant(v, q):
     return round(v / q) * q if q > 0 else v
+
+def reading(sensor, rng, y, noise, q):
+    """One reading of the true value y, as written (--noise-free: y itself to 8 digits, the
+    draw made either way)."""
+    e = sensor.read(rng, noise)
+    return f"{y:.8f}" if NOISE_FREE else f"{quant(y + e, q):.4f}"
 
 class Hold:
     """The readings of one hold: a Kelvin element (creep) and a linear drift on the value g."""
@@ -172,7 +178,7 @@ def make_load(rng, effect, mag, out):
         f.write("time_s,dwell_s,load_g,disp_mm\n")
         sensor = Sensor()
         for tt, dw, u, y in rows:
-            f.write(f"{tt:.1f},{dw:.1f},{u:.3f},{quant(y + sensor.read(rng, noise), q):.4f}\n")
+            f.write(f"{tt:.1f},{dw:.1f},{u:.3f},{reading(sensor, rng, y, noise, q)}\n")
 
 def make_voltage(rng, effect, mag, out):
     loads = rng.choice([[30, 40, 50, 60, 70, 80, 90, 100], [25, 40, 55, 70, 85, 100], [30, 45, 60, 75, 90, 105, 120]])
@@ -230,7 +236,7 @@ def make_voltage(rng, effect, mag, out):
         f.write("time_s,dwell_s,segment,load_g,voltage_V,disp_mm\n")
         sensor = Sensor()
         for tt, dw, s, Fg, v, y in rows:
-            f.write(f"{tt:.1f},{dw:.1f},{s},{Fg},{v:.4f},{quant(y + sensor.read(rng, noise), q):.4f}\n")
+            f.write(f"{tt:.1f},{dw:.1f},{s},{Fg},{v:.4f},{reading(sensor, rng, y, noise, q)}\n")
 
 MAGS = {
     "none": [0], "drift": [0.03, 0.06, 0.12], "outliers": [0.05, 0.1, 0.2],
@@ -242,6 +248,7 @@ ONCE_PER_HOLD = False  # --once-per-hold: voltage creep read once per hold (no r
 AR_RHO = 0.0  # --ar-noise RHO: AR(1) sensor noise (clean records with it should stay `none`)
 ONE_LOAD = False  # --one-load: voltage tests at the first of the drawn loads only (one segment)
 RANDOM_TURNS = False  # --random-turns: damped and repeated load protocols and voltage cycles become random turning points
+NOISE_FREE = False  # --noise-free: the same files without noise or rounding (every draw alike)
 CELLS = None  # --cells N: N relay levels in the Preisach truth (default 30 load, 24 voltage)
 def take_value(args, flag, convert, default):
     """Removes `flag VALUE` from args and returns convert(VALUE), or default without the flag."""
@@ -259,7 +266,8 @@ if __name__ == "__main__":
     ONCE_PER_HOLD = "--once-per-hold" in args
     ONE_LOAD = "--one-load" in args
     RANDOM_TURNS = "--random-turns" in args
-    args = [a for a in args if a not in ("--once-per-hold", "--one-load", "--random-turns")]
+    NOISE_FREE = "--noise-free" in args
+    args = [a for a in args if a not in ("--once-per-hold", "--one-load", "--random-turns", "--noise-free")]
     write_sets("independent_cases.py", __doc__, args,
                lambda side, rng, e, mag, out: (make_load if side == "load" else make_voltage)(rng, e, mag, out),
                lambda side, e, i: random.Random(i * 7919 + len(e) * 31 + (0 if side == "load" else 100000)),
