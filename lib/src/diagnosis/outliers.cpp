@@ -183,34 +183,6 @@ std::vector<double> hold_scores(const Record& rec, const std::vector<double>& pr
   return out;
 }
 
-}  // namespace
-
-/// Spikes on a ramp (session 26): where the input moves strictly one way through readings
-/// t - 1, t, t + 1 (one segment), a rate-independent response with a non-negative density
-/// moves one way too, and smoothly where the readings are close. Reading t's score: the lesser
-/// of its distance from the interpolation between its neighbours at its input (off the median
-/// of those distances) and how far it lies outside the interval of its neighbours (how far it
-/// breaks the branch's monotonicity), in units of the MAD of those distances (at least half a
-/// sensor step and 1e-4 of the range); 0 within two sensor steps of that interval. The MAD is
-/// the smaller of the one over every ramp reading and the one over the half whose neighbours
-/// lie closest together: where the neighbours are far apart, the response's curvature between
-/// them (or the steps of a coarse relay grid) moves the interpolation by more than the noise
-/// does, and does not move a reading outside the interval (measured, session 62, on clean
-/// records: on the fifth independent generator's 24-level relay grids the MAD over every ramp
-/// reading was 1.5-4.5 times the sensor noise, the smaller of the two 0.9-2.8 times; on the
-/// third 0.7-2.1 and 0.6-2.1 times). A transformation steeper than the reading step puts a
-/// reading far off the interpolation but inside the interval, or outside it by the noise only
-/// (measured: Preisach planes with ridges 0.05-0.09 V wide read every 0.1 V, a reading at the
-/// knee of a fall 0.005 above its flat neighbour and half the fall off the interpolation:
-/// 11-125 MADs by the distance alone).
-/// Needs no model, so no misfit of a coarse baseline on a short record hides a spike.
-/// Since session 62 also, scored by how far they break monotonicity alone: a reading at a
-/// turning value of the input that is not the response's extreme among its neighbours (its
-/// highest at a top, where the response rises with the input, the record's direction along its
-/// ramps), and a run of two or three readings inside a ramp, each outside the interval of the
-/// readings either side of the run (a spike at a turning value, or two in a row, passed the
-/// single-reading test: measured on fresh fifth- and third-generator records, 8-17 noise
-/// sigmas, named `none`; the largest such score on 650 load records without spikes 2.9).
 /// How far the two steps at a turning value of the input (reading t, both neighbours on one
 /// side of it) exceed, the smaller of the two, the largest change of the response over the
 /// same input interval, in the same direction, on every other pass of the record (a run of
@@ -266,6 +238,36 @@ double turn_steps_excess(const Record& rec, std::size_t t, double direction) {
   return std::max(0.0, std::min(in - in_other, out - out_other));
 }
 
+}  // namespace
+
+/// Spikes on a ramp (session 26): where the input moves strictly one way through readings
+/// t - 1, t, t + 1 (one segment), a rate-independent response with a non-negative density
+/// moves one way too, and smoothly where the readings are close. Reading t's score: the lesser
+/// of its distance from the interpolation between its neighbours at its input (off the median
+/// of those distances) and how far it lies outside the interval of its neighbours (how far it
+/// breaks the branch's monotonicity), in units of the MAD of those distances (at least half a
+/// sensor step and 1e-4 of the range); 0 within two sensor steps of that interval. The MAD is
+/// the smaller of the one over every ramp reading and the one over the half whose neighbours
+/// lie closest together: where the neighbours are far apart, the response's curvature between
+/// them (or the steps of a coarse relay grid) moves the interpolation by more than the noise
+/// does, and does not move a reading outside the interval (measured, session 62, on clean
+/// records: on the fifth independent generator's 24-level relay grids the MAD over every ramp
+/// reading was 1.5-4.5 times the sensor noise, the smaller of the two 0.9-2.8 times; on the
+/// third 0.7-2.1 and 0.6-2.1 times). A transformation steeper than the reading step puts a
+/// reading far off the interpolation but inside the interval, or outside it by the noise only
+/// (measured: Preisach planes with ridges 0.05-0.09 V wide read every 0.1 V, a reading at the
+/// knee of a fall 0.005 above its flat neighbour and half the fall off the interpolation:
+/// 11-125 MADs by the distance alone).
+/// Needs no model, so no misfit of a coarse baseline on a short record hides a spike.
+/// Since session 62 also, scored by how far they break monotonicity alone: a reading at a
+/// turning value of the input that is not the response's extreme among its neighbours (its
+/// highest at a top, where the response rises with the input, the record's direction along its
+/// ramps), and a run of two or three readings inside a ramp, each outside the interval of the
+/// readings either side of the run (a spike at a turning value, or two in a row, passed the
+/// single-reading test: measured on fresh fifth- and third-generator records, 8-17 noise
+/// sigmas, named `none`; the largest such score on 650 load records without spikes 2.9).
+/// Since session 64 also a reading at a turning value whose two steps exceed every other
+/// pass's change over their inputs (turn_steps_excess).
 std::vector<double> ramp_scores(const Record& rec, double resolution) {
   const std::size_t n = rec.size();
   std::vector<double> out(n, 0.0), e(n, std::numeric_limits<double>::quiet_NaN()), all;
