@@ -183,52 +183,69 @@ std::vector<double> hold_scores(const Record& rec, const std::vector<double>& pr
   return out;
 }
 
+/// A pass of a record: readings first..last of one segment along which the input moves one way
+/// (`way`, +1 up), as long as it keeps moving that way.
+struct Pass {
+  std::size_t first, last;
+  double way;
+};
+
+/// The record's passes; consecutive passes share their turning reading.
+std::vector<Pass> passes(const Record& rec) {
+  std::vector<Pass> out;
+  for (std::size_t s = 0; s + 1 < rec.size();) {
+    const double way = rec.u[s + 1] > rec.u[s] ? 1.0 : rec.u[s + 1] < rec.u[s] ? -1.0 : 0.0;
+    if (way == 0.0 || rec.seg[s + 1] != rec.seg[s]) {
+      ++s;
+      continue;
+    }
+    std::size_t e = s + 1;
+    while (e + 1 < rec.size() && rec.seg[e + 1] == rec.seg[e] &&
+           (rec.u[e + 1] - rec.u[e]) * way > 0.0)
+      ++e;
+    out.push_back({s, e, way});
+    s = e;
+  }
+  return out;
+}
+
 /// How far the two steps at a turning value of the input (reading t, both neighbours on one
-/// side of it) exceed, the smaller of the two, the largest change of the response over the
-/// same input interval, in the same direction, on every other pass of the record (a run of
-/// readings along which the input moves one way); 0 where t is no turning value or no other
-/// pass spans an interval. A spike at a turning value in the direction of the turn keeps the
-/// reading the response's extreme among its neighbours (the monotonicity test above passes
-/// it) but lengthens both steps by its size. Rate-independent memory does not: the step out of
-/// a turning value starts a branch, and on a Preisach plane of non-negative density the
-/// change from a reversal at a to b is the density over the triangle a <= beta <= alpha <= b,
-/// the least of every branch's change over [a, b], while the step in ends a branch that other
+/// side of it, `turn` +1 at a top) exceed, the smaller of the two, the largest change of the
+/// response over the same input interval, in the same direction, on every other pass of the
+/// record; 0 where no other pass spans an interval. `sign`: +1 where the response rises with
+/// the input. A spike at a turning value in the direction of the turn keeps the reading the
+/// response's extreme among its neighbours (the monotonicity test in ramp_scores passes it)
+/// but lengthens both steps by its size. Rate-independent memory does not: the step out of a
+/// turning value starts a branch, and on a Preisach plane of non-negative density the change
+/// from a reversal at a to b is the density over the triangle a <= beta <= alpha <= b, the
+/// least of every branch's change over [a, b], while the step in ends a branch that other
 /// passes from the same or further reversals repeat. A lag behind each step (creep read once
 /// per hold) shortens both steps, a drift adds its per-step trend to every pass alike.
-double turn_steps_excess(const Record& rec, std::size_t t, double direction) {
-  const std::size_t n = rec.size();
-  const double a = rec.u[t - 1], b = rec.u[t], c = rec.u[t + 1];
-  const double turn = b > a && b > c ? 1.0 : b < a && b < c ? -1.0 : 0.0;
-  if (turn == 0.0 || rec.seg[t - 1] != rec.seg[t] || rec.seg[t] != rec.seg[t + 1]) return 0.0;
-  const double sign = direction >= 0.0 ? 1.0 : -1.0;
-  // The largest change of sign * y from input lo to hi along another pass moving `way` (+1
-  // up): positive along either way for a response that rises with the input.
+double turn_steps_excess(const Record& rec, const std::vector<Pass>& all, std::size_t t,
+                         double turn, double sign) {
+  // The largest change of sign * y from input lo to hi along another pass moving `way`:
+  // positive along either way for a response that rises with the input.
   auto largest_other = [&](double lo, double hi, double way) {
     double largest = -HUGE_VAL;
-    std::size_t s = 0;
-    while (s + 1 < n) {
-      // The pass from s: consecutive readings in one segment moving `way`.
-      std::size_t e = s;
-      while (e + 1 < n && rec.seg[e + 1] == rec.seg[e] && (rec.u[e + 1] - rec.u[e]) * way > 0.0)
-        ++e;
-      const bool has_t = s <= t && t <= e;
-      const double ulo = std::min(rec.u[s], rec.u[e]), uhi = std::max(rec.u[s], rec.u[e]);
-      if (e > s && !has_t && ulo <= lo && uhi >= hi) {
-        auto at = [&](double v) {  // sign * y interpolated along the pass at input v
-          for (std::size_t k = s; k < e; ++k) {
-            const double u0 = rec.u[k], u1 = rec.u[k + 1];
-            if ((v - u0) * (v - u1) > 0.0) continue;
-            const double w = (v - u0) / (u1 - u0);
-            return sign * ((1.0 - w) * rec.y[k] + w * rec.y[k + 1]);
-          }
-          return sign * rec.y[e];
-        };
-        largest = std::max(largest, at(hi) - at(lo));
-      }
-      s = std::max(e, s + 1);
+    for (const Pass& p : all) {
+      const std::size_t s = p.first, e = p.last;
+      if (p.way != way || (s <= t && t <= e) || std::min(rec.u[s], rec.u[e]) > lo ||
+          std::max(rec.u[s], rec.u[e]) < hi)
+        continue;
+      auto at = [&](double v) {  // sign * y interpolated along the pass at input v
+        for (std::size_t k = s; k < e; ++k) {
+          const double u0 = rec.u[k], u1 = rec.u[k + 1];
+          if ((v - u0) * (v - u1) > 0.0) continue;
+          const double w = (v - u0) / (u1 - u0);
+          return sign * ((1.0 - w) * rec.y[k] + w * rec.y[k + 1]);
+        }
+        return sign * rec.y[e];
+      };
+      largest = std::max(largest, at(hi) - at(lo));
     }
     return largest;
   };
+  const double a = rec.u[t - 1], b = rec.u[t], c = rec.u[t + 1];
   // Both steps in the same frame: the change of sign * y from the lower input to the higher.
   const double in = turn * sign * (rec.y[t] - rec.y[t - 1]);
   const double out = turn * sign * (rec.y[t] - rec.y[t + 1]);
@@ -310,14 +327,16 @@ std::vector<double> ramp_scores(const Record& rec, double resolution) {
   };
   // At a turning value of the input (both neighbours on one side of it) the response is at an
   // extreme among its neighbours: its highest where the input is, if it rises with the input.
+  // And its two steps are no longer than other passes make them (turn_steps_excess).
+  const std::vector<Pass> record_passes = passes(rec);
   for (std::size_t t = 1; t + 1 < n; ++t) {
     const double a = rec.u[t - 1], b = rec.u[t], c = rec.u[t + 1];
     const double turn = b > a && b > c ? 1.0 : b < a && b < c ? -1.0 : 0.0;
     if (turn == 0.0 || !one_segment(t - 1, t + 1)) continue;
     const double y0 = rec.y[t - 1], y1 = rec.y[t], y2 = rec.y[t + 1];
     mark(t, turn * direction >= 0.0 ? std::max(y0, y2) - y1 : y1 - std::min(y0, y2));
+    mark(t, turn_steps_excess(rec, record_passes, t, turn, direction >= 0.0 ? 1.0 : -1.0));
   }
-  for (std::size_t t = 1; t + 1 < n; ++t) mark(t, turn_steps_excess(rec, t, direction));
   // A run of two or three readings inside a ramp (the input moving strictly one way from the
   // reading before the run to the one after it): each lies in the interval of the readings
   // either side of the run. The run scores its reading least outside it.
