@@ -24,6 +24,7 @@ diagnoses that. Each miss falls in one of three classes:
 Prints one line per miss, then the counts per class and per generator. Slow (a few seconds
 per record): N = 4 is 240 records, about 12 minutes on two cores.
 """
+import argparse
 import concurrent.futures
 import json
 import os
@@ -60,20 +61,16 @@ def generate(script_dir, out, n, first, gen, extra):
                    stdout=subprocess.DEVNULL)
 
 
-def main(args):
-    scpkit = os.path.join(os.path.dirname(__file__), "..", "build", "cli", "scpkit")
-    jobs = 2
-    for flag in ("--scpkit", "--jobs"):
-        if flag in args:
-            k = args.index(flag)
-            if flag == "--scpkit":
-                scpkit = args[k + 1]
-            else:
-                jobs = int(args[k + 1])
-            del args[k:k + 2]
-    if len(args) != 3:
-        sys.exit(__doc__)
-    out, n, first = args[0], int(args[1]), int(args[2])
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("out", help="directory for the records (noisy/ and exact/)")
+    parser.add_argument("n", type=int, help="records per effect, side and generator")
+    parser.add_argument("first", type=int, help="first seed")
+    parser.add_argument("--scpkit", default=os.path.join(os.path.dirname(__file__), "..", "build",
+                                                         "cli", "scpkit"))
+    parser.add_argument("--jobs", type=int, default=2, help="diagnose runs at once")
+    a = parser.parse_args()
+    out, n, first, scpkit, jobs = a.out, a.n, a.first, a.scpkit, a.jobs
     script_dir = os.path.dirname(os.path.abspath(__file__))
     records = []  # (generator, noisy path)
     for gen in GENERATORS:
@@ -118,4 +115,4 @@ def main(args):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1:])
+    main()
