@@ -276,12 +276,18 @@ Finding kelvin_creep(Context& ctx) {
     }
   }
   const double slowest = median(durations) / 3.0;
+  // Refined between the grid's points on load tests only (refine_kelvin; tau_max 0: not
+  // refined). On a test at several loads an element restarted with each load offsets every
+  // first rise as a lonely stroke does, and there refining it moved the third generator's
+  // voltage lonely stroke of seed 2002 (pinned in tests/independent_test.sh, named by its
+  // return-point offset at p = 1e-305) from a creep gain of 54.6 % at p = 0.010 to 62 % at
+  // p = 0.007, named `creep`; on a load test the lonely stroke is never named.
   double tau_max = 0.0;
   for (double c : {0.1, 0.2, 0.4}) {
     for (double tau : {0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0}) {
       if (tau <= 10.0 || tau * step <= slowest) {
         candidates.push_back({c, tau * step});
-        tau_max = std::max(tau_max, tau * step);
+        if (rec.input_is_load) tau_max = std::max(tau_max, tau * step);
       }
     }
   }
