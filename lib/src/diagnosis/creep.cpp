@@ -90,7 +90,12 @@ Kelvin refine_kelvin(Kelvin best, double best_sse, double tau_max, double train_
   struct Round {
     double fc, ft;
   };
+  bool moved = true;
   for (const Round r : {Round{1.25, 1.41}, Round{1.25, 1.41}, Round{1.12, 1.19}}) {
+    // A repeat of the last round's factors around an element that did not move would try the
+    // same neighbours again.
+    if (!moved && r.fc == 1.25) continue;
+    moved = false;
     std::vector<Kelvin> near;
     for (int i = -1; i <= 1; ++i) {
       for (int j = -1; j <= 1; ++j) {
@@ -106,6 +111,7 @@ Kelvin refine_kelvin(Kelvin best, double best_sse, double tau_max, double train_
       if (ss[i] < best_sse) {
         best_sse = ss[i];
         best = near[i];
+        moved = true;
       }
     }
   }
