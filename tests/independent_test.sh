@@ -237,6 +237,13 @@
 #   segment's first rise (third generator seed 8403; the return-point offset across loads,
 #   creep gaining 6.2 % at p = 0.010 against the running-maximum term's 2.9 %): `creep`
 #   (`lonely_stroke` by that offset alone before).
+# - Session 66: a third-generator voltage lonely stroke (seed 9402, four loads, offset across
+#   loads at z = -15.7) named `creep` by a Kelvin element restarted at each load (24.5 % against
+#   the term's 13.4 %, held out by load segment); held out within the segments the term gains
+#   26.2 % and the element 29.5 %, a near tie that goes to the lonely stroke: `lonely_stroke`.
+#   And two fourth-generator voltage creeps whose element restarts with each load (seeds 9408
+#   and 9412, offsets at z = -17.1 and -8.7), where the element gains 40.0 and 49.7 % within
+#   the segments against the term's 22.3 and 18.0 %: `creep`, as before.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -348,6 +355,9 @@ make_cases c c 1 8200 load-outliers
 make_cases e e 1 8217 load-drift
 make_cases c c 1 8403 voltage-creep
 make_cases b b 1 7600 voltage-drift
+make_cases c c 1 9402 voltage-lonely_stroke
+make_cases d d 1 9408 voltage-creep
+make_cases d d 1 9412 voltage-creep
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -470,5 +480,8 @@ expect "$work/e/load-outliers-8219.csv" outliers
 expect "$work/c/load-outliers-8200.csv" outliers
 expect "$work/e/load-drift-8217.csv" drift
 expect "$work/c/voltage-creep-8403.csv" creep
+expect "$work/c/voltage-lonely_stroke-9402.csv" lonely_stroke
+expect "$work/d/voltage-creep-9408.csv" creep
+expect "$work/d/voltage-creep-9412.csv" creep
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]

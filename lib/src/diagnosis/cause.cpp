@@ -15,9 +15,6 @@ namespace {
 constexpr double kMaterialPct = 1.0;  ///< % of range: the least residual error called structure
 /// The least share of the held-out readings that must be identified for `unexplained`.
 constexpr std::size_t kIdentifiedShareDivisor = 4;  // a quarter
-/// Creep known by its gain alone is named over a lonely stroke seen at its return points only
-/// when it gains this many times as much on held-out data.
-constexpr double kCreepOverLonely = 1.25;
 /// Outliers whose removal gains little yield to another detected extension gaining this many
 /// times as much (name_cause).
 constexpr double kOverOutliers = 2.0;
@@ -107,6 +104,13 @@ void name_by_signature_alone(Diagnosis& d, const std::string& effect, const std:
   }
 }
 
+/// Whether detected creep is seen without a model: readings move during holds, or the residuals
+/// follow the hold times (dwell_signature).
+bool creep_seen_without_model(const Context& ctx) {
+  return (ctx.holds.available && !ctx.creep_by_gain_only) ||
+         (ctx.dwell.available && ctx.dwell.p_value < ctx.opt.alpha);
+}
+
 /// The detected finding that names the cause by the evidence for it and its extension's
 /// held-out gain; nullptr where none is detected.
 const Finding* named_by_extension(const Context& ctx, const Diagnosis& d, const Signs& signs,
@@ -129,10 +133,7 @@ const Finding* named_by_extension(const Context& ctx, const Diagnosis& d, const 
   // readings moving during holds (creep) and history-dependent loop shapes explain return-point
   // offsets too, so they come before the lonely stroke.
   const Finding* creep = detected("creep");
-  // Creep is seen without a model when readings move during holds, or when the residuals
-  // follow the hold times (dwell_signature).
-  const bool creep_seen = creep && ((ctx.holds.available && !ctx.creep_by_gain_only) ||
-                                    (ctx.dwell.available && ctx.dwell.p_value < opt.alpha));
+  const bool creep_seen = creep && creep_seen_without_model(ctx);
   // Non-congruence counts as seen when its model-free signature passes alpha; named by its
   // map's gain with the signature only at gain_alpha (detect_noncongruence) it competes by
   // gain like the other gain-only effects (session 38: with a prototype of that route, Fisher's
@@ -534,6 +535,11 @@ void name_cause(Context& ctx, Diagnosis& d) {
     return;
   }
   name_by_signature(ctx, d, signs, judge_residuals(d));
+}
+
+bool creep_may_be_lonely_stroke(const Context& ctx, const Diagnosis& d) {
+  return d.cause == "creep" && !ctx.creep_carried && !creep_seen_without_model(ctx) &&
+         read_signs(ctx).lonely_offset_across_loads;
 }
 
 }  // namespace scpkit::diagnosis

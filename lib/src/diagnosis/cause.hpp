@@ -7,6 +7,10 @@ namespace scpkit::diagnosis {
 
 struct Context;
 
+/// Creep known by its gain alone is named over a lonely stroke seen at its return points only
+/// when it gains this many times as much on held-out data.
+inline constexpr double kCreepOverLonely = 1.25;
+
 /// Sets d.cause and d.cause_note from d.findings (every detector run) and the signatures in
 /// ctx: effects read off model-free signatures first (outliers, creep seen in holds,
 /// non-congruence), then the lonely stroke and the rest by their held-out gains, compared like
@@ -16,5 +20,11 @@ struct Context;
 /// (by its signature). The lonely stroke's second look (held out within segments) is the
 /// caller's: it needs the data.
 void name_cause(Context& ctx, Diagnosis& d);
+
+/// Whether d names creep by the gain of a Kelvin element restarted at each load alone, on a
+/// test at several loads driven by voltage whose lonely-stroke offset across loads is
+/// significant: the element relaxing from each segment's first reading offsets the first rise
+/// as a lonely stroke does, so the caller takes the lonely stroke's second look there too.
+bool creep_may_be_lonely_stroke(const Context& ctx, const Diagnosis& d);
 
 }  // namespace scpkit::diagnosis

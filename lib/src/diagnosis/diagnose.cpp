@@ -98,10 +98,12 @@ HeldOut hold_out(const DiagnoseData& data, const DiagnoseOptions& options,
 /// gains at least min_gain_pct at alpha on its own sign-flip test (no signature halves the
 /// level here) and more than a trend in time (drift) and a Kelvin element restarted at each
 /// load (creep) gain on the same folds: both also change the first rise against later cycles.
+/// The Kelvin elements' gains are divided by `creep_margin` first (where creep was named by
+/// its gain alone, gains that nearly tie go to the lonely stroke, as in cause.cpp).
 /// Returns the finding to report, or nothing.
 std::optional<Finding> lonely_within_segments(const DiagnoseData& data, const DiagnoseOptions& opt,
                                               const diagnosis::Baseline& base,
-                                              const Finding& by_load) {
+                                              const Finding& by_load, double creep_margin) {
   // L and the smoothness were chosen on the whole record, which the folds do not enter: the
   // same choice, without choosing again.
   DiagnoseOptions within = opt;
@@ -120,7 +122,8 @@ std::optional<Finding> lonely_within_segments(const DiagnoseData& data, const Di
   const Finding drift = diagnosis::detect_drift(ctx);
   const Finding creep = diagnosis::detect_creep(ctx);
   const Finding carried = diagnosis::detect_creep_across_loads(ctx);
-  if (!(lonely.gain_pct > std::max({drift.gain_pct, creep.gain_pct, carried.gain_pct})))
+  if (!(lonely.gain_pct >
+        std::max(drift.gain_pct, std::max(creep.gain_pct, carried.gain_pct) / creep_margin)))
     return std::nullopt;
   lonely.detected = true;
   lonely.evidence = fmt::format(
@@ -210,14 +213,36 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
 
   name_cause(ctx, d);
   // Where nothing was named on a test held out by load segment: the lonely stroke's second
-  // look, held out within the segments (lonely_within_segments).
-  if ((d.cause == "none" || d.cause == "unexplained") && rec.fold_kind == "load segments") {
+  // look, held out within the segments (lonely_within_segments). And where creep is named by
+  // the gain of a Kelvin element restarted at each load alone beside the lonely stroke's offset
+  // across loads (creep_may_be_lonely_stroke): held out by load segment the element's gain
+  // comes from every reading and the running-maximum term's from the few first rises of the
+  // middle loads, while within the segments both are scored on every first rise, and the
+  // second look compares the term with that element there, gains that nearly tie going to the
+  // lonely stroke (kCreepOverLonely, as where both are detected held out by load segment).
+  // Measured (session 66, docs/diagnose-log.md): held out within the segments, a fresh
+  // third-generator lonely stroke named `creep` (seed 9402) gains 26.2 % by the term and 29.5 %
+  // by the element; three fourth-generator creeps, whose element restarts with each load,
+  // 18.0-22.3 % against 40.0-49.7 %.
+  const bool creep_named = creep_may_be_lonely_stroke(ctx, d);
+  if ((d.cause == "none" || d.cause == "unexplained" || creep_named) &&
+      rec.fold_kind == "load segments") {
     for (Finding& f : d.findings) {
       if (f.effect != "lonely_stroke") continue;
-      if (std::optional<Finding> second = lonely_within_segments(data, opt, base, f)) {
+      if (std::optional<Finding> second = lonely_within_segments(
+              data, opt, base, f, creep_named ? diagnosis::kCreepOverLonely : 1.0)) {
         f = std::move(*second);
         d.cause = f.effect;
         d.cause_note.clear();
+      }
+    }
+    for (Finding& f : d.findings) {
+      if (f.effect == "creep" && f.detected && d.cause == "lonely_stroke") {
+        f.detected = false;
+        f.evidence +=
+            "; not named: held out within the load segments, the lonely stroke's term gains as "
+            "much as a Kelvin element restarted at each load, or nearly (the lonely stroke's "
+            "second look)";
       }
     }
   }
