@@ -222,8 +222,8 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   // lonely stroke (kCreepOverLonely, as where both are detected held out by load segment).
   // Measured (session 66, docs/diagnose-log.md): held out within the segments, a fresh
   // third-generator lonely stroke named `creep` (seed 9402) gains 26.2 % by the term and 29.5 %
-  // by the element; three fourth-generator creeps, whose element restarts with each load,
-  // 18.0-22.3 % against 40.0-49.7 %.
+  // by the element; two fourth-generator creeps, whose element restarts with each load,
+  // 18.0-22.3 % against 40.0-49.7 % (seeds 9408 and 9412).
   const bool creep_named = creep_may_be_lonely_stroke(ctx, d);
   if ((d.cause == "none" || d.cause == "unexplained" || creep_named) &&
       rec.fold_kind == "load segments") {
