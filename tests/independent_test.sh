@@ -244,6 +244,10 @@
 #   And two fourth-generator voltage creeps whose element restarts with each load (seeds 9408
 #   and 9412, offsets at z = -17.1 and -8.7), where the element gains 40.0 and 49.7 % within
 #   the segments against the term's 22.3 and 18.0 %: `creep`, as before.
+# - Session 67: a fourth-generator voltage knee at five loads (seed 9402, 1 % noise) named
+#   `lonely_stroke` by the running-maximum term's 6.6 % while the cubic maps gained 39.7 %; the
+#   term's return-point offset is not there (z = 1.4, p = 0.38 over 93 comparisons), so the two
+#   compete by gain: `offset_nonlinearity`.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -358,6 +362,7 @@ make_cases b b 1 7600 voltage-drift
 make_cases c c 1 9402 voltage-lonely_stroke
 make_cases d d 1 9408 voltage-creep
 make_cases d d 1 9412 voltage-creep
+make_cases d d 1 9402 voltage-offset_nonlinearity
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -483,5 +488,6 @@ expect "$work/c/voltage-creep-8403.csv" creep
 expect "$work/c/voltage-lonely_stroke-9402.csv" lonely_stroke
 expect "$work/d/voltage-creep-9408.csv" creep
 expect "$work/d/voltage-creep-9412.csv" creep
+expect "$work/d/voltage-offset_nonlinearity-9402.csv" offset_nonlinearity
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]
