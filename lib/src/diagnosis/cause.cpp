@@ -121,7 +121,7 @@ const Finding* named_by_extension(const Context& ctx, const Diagnosis& d, const 
   // of the first load's segment against the others, which a knee in the maps can mimic (the
   // converse mostly holds: on knee data the running-maximum term gains little), so a detected
   // lonely stroke is preferred to offset_nonlinearity, unless its model-free return-point offset
-  // was read and is not there (lonely_unseen, below). Otherwise the detected effect whose
+  // was read and is not there (lonely_holds_maps_back, below). Otherwise the detected effect whose
   // extension gains most on held-out data.
   auto detected = [&](const std::string& e) -> const Finding* {
     for (const Finding& f : d.findings) {
@@ -155,18 +155,19 @@ const Finding* named_by_extension(const Context& ctx, const Diagnosis& d, const 
   // offset is significant too (a trend within each segment gives the running-maximum term a
   // gain, not that offset).
   const Finding* lonely = detected("lonely_stroke");
-  const bool lonely_seen = lonely && ctx.return_point.running_max.available &&
-                           ctx.return_point.running_max.p_value < opt.alpha;
-  // A lonely stroke known by its term's gain alone, where readings in one memory state before
-  // and after the first rise were compared and do not differ at alpha: it then competes with an
-  // offset nonlinearity by gain, as the other gain-only effects do, rather than holding it back.
+  const Signature& offset = ctx.return_point.running_max;
+  const bool lonely_seen = lonely && offset.available && offset.p_value < opt.alpha;
+  // A detected lonely stroke holds an offset nonlinearity back where its return-point offset is
+  // seen or cannot be read. Where readings in one memory state before and after the first rise
+  // were compared and do not differ at alpha, the lonely stroke is known by its term's gain
+  // alone and competes with the maps by gain, as the other gain-only effects do.
   // Measured (session 67): a fresh fourth-generator knee at five loads (seed 9402, 1 % noise)
   // was named `lonely_stroke` by the term's 6.6 % (p = 0.001) against the cubic maps' 39.7 %,
   // its return-point offset at z = 1.4, p = 0.38 over 93 comparisons. Of 120 fresh lonely
   // strokes (seeds 9500-9523 of the five generators) and 40 knees (9500-9507), three had both
   // detected, all lonely strokes with the offset seen (z >= 9.6), the term out-gaining the maps
-  // 2.8-11 times.
-  const bool lonely_unseen = lonely && ctx.return_point.running_max.available && !lonely_seen;
+  // 3.1-11 times.
+  const bool lonely_holds_maps_back = lonely && (lonely_seen || !offset.available);
   // Gains that nearly tie go to the lonely stroke, whose return-point offset is model-free
   // evidence that creep read once per hold lacks: measured on 48 independent-generator voltage
   // records of a lonely stroke (creep also detected in 46), creep gained at most 1.15 times what
@@ -214,7 +215,7 @@ const Finding* named_by_extension(const Context& ctx, const Diagnosis& d, const 
   for (const Finding& f : d.findings) {
     if (!f.detected || (without_outliers && f.effect == "outliers")) continue;
     if (f.effect == "offset_nonlinearity" &&
-        ((lonely && !lonely_unseen) || drift_seen || (drift && ctx.drift_within_segments) ||
+        (lonely_holds_maps_back || drift_seen || (drift && ctx.drift_within_segments) ||
          signs.lonely_offset_across_loads))
       continue;
     // A coupling is a static map of the load too: within a segment it cannot make readings in
