@@ -248,6 +248,15 @@
 #   `lonely_stroke` by the running-maximum term's 6.6 % while the cubic maps gained 39.7 %; the
 #   term's return-point offset is not there (z = 1.4, p = 0.38 over 93 comparisons), so the two
 #   compete by gain: `offset_nonlinearity`.
+# - Session 69: the lag in readings of one memory state (lag_signature, load tests read once
+#   per hold). Third-generator load creeps, `none` before: seed 9602 (z = 7.9 over 144
+#   comparisons, the Kelvin element gaining 5.4 % at p = 0.15), named by the signature alone,
+#   and seed 9622 (z = 5.8, the element gaining 8.8 % at p = 0.027), by the signature and the
+#   gain: `creep`. A fourth-generator creep (seed 9600, z = 3.4) named `drift` by a settling
+#   trend gaining 44.4 % against the element's 42.4 %: `creep`, seen by the signature. A
+#   first-generator moving Preisach (seed 9620: congruency p = 8e-6, the output fed in one
+#   reading late, so the lag signature fires too, p = 3e-16): `minor_loop_noncongruence`, as
+#   before.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -363,6 +372,10 @@ make_cases c c 1 9402 voltage-lonely_stroke
 make_cases d d 1 9408 voltage-creep
 make_cases d d 1 9412 voltage-creep
 make_cases d d 1 9402 voltage-offset_nonlinearity
+make_cases c c 1 9602 load-creep
+make_cases c c 1 9622 load-creep
+make_cases d d 1 9600 load-creep
+make_cases a a 1 9620 load-minor_loop_noncongruence
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -489,5 +502,9 @@ expect "$work/c/voltage-lonely_stroke-9402.csv" lonely_stroke
 expect "$work/d/voltage-creep-9408.csv" creep
 expect "$work/d/voltage-creep-9412.csv" creep
 expect "$work/d/voltage-offset_nonlinearity-9402.csv" offset_nonlinearity
+expect "$work/c/load-creep-9602.csv" creep
+expect "$work/c/load-creep-9622.csv" creep
+expect "$work/d/load-creep-9600.csv" creep
+expect "$work/a/load-minor_loop_noncongruence-9620.csv" minor_loop_noncongruence
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]

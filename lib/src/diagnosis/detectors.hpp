@@ -45,7 +45,10 @@ struct Context {
   ReturnPointSignatures return_point;  ///< model-free (signatures.hpp)
   Signature congruency, holds;
   Signature congruency_robust;  ///< the same, blind to single readings off their neighbours
-  Signature dwell;     ///< creep with one reading per hold: residuals against the hold times
+  Signature dwell;  ///< creep with one reading per hold: residuals against the hold times
+  /// Load tests: readings in one memory state against the lag their path would leave (creep;
+  /// lag_signature in signatures.hpp, computed by detect_creep).
+  Signature lag;
   Signature coupling;  ///< the loop shape changing with the load (detect_load_shape_coupling)
   /// Creep with readings during holds named by the Kelvin element's held-out gain while the
   /// readings during holds do not move at alpha (detect_creep): known by a gain only, it

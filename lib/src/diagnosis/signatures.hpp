@@ -12,6 +12,8 @@
 //   is non-congruence (after differences in the running maximum are excluded).
 // - Holds: readings taken while the input is held still must not move; motion in the direction
 //   of the last input step is creep (a drift moves them regardless of that direction).
+// - Lag (given a feature from a fitted model): readings of one memory state reached along
+//   different paths differ by the lag each path leaves, which no rate-independent model makes.
 #include <string>
 #include <vector>
 
@@ -59,6 +61,12 @@ double input_steps(const Record& rec);
 
 /// `sigma`: the noise of one reading (the diagnosis' floor).
 ReturnPointSignatures return_point_signatures(const Record& rec, double sigma);
+/// Creep read where a rate-independent model cannot take it up: readings in one memory state
+/// must read the same, while a lag leaves each reading short of its value by what the recent
+/// path moved. `lag` per row: a Kelvin element's departure from a rate-independent prediction
+/// (v - p, v relaxing towards p). The pairs' differences regressed on its difference beside
+/// the return-point columns; one-sided (a lag, not a lead).
+Signature lag_signature(const Record& rec, const std::vector<double>& lag, double sigma);
 /// Minor loops between the same extrema after different histories: does the difference of two
 /// branches change along them? `raw` is the calibrated test; `robust` reads that change through
 /// a running median of three, so that one reading off its neighbours (a spike) does not count.
