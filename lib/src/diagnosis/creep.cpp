@@ -251,6 +251,22 @@ Finding prony_creep(Context& ctx, double hold) {
       "the lag of the response behind its rate-independent value (Kelvin elements)");
 }
 
+// The model seen through a Kelvin element in the readings' own time: p -> (1 - c) p + c v, v
+// relaxing towards p with time constant tau, restarted at each segment.
+OutputFilter kelvin_filter(const Record& rec, Kelvin k) {
+  return [&rec, k](Eigen::Ref<Eigen::VectorXd> p) {
+    double v = 0.0;
+    for (Eigen::Index t = 0; t < p.size(); ++t) {
+      const auto i = static_cast<std::size_t>(t);
+      const bool start = i == 0 || rec.seg[i] != rec.seg[i - 1];
+      const double decay =
+          start ? 0.0 : std::exp(-std::max(rec.time[i] - rec.time[i - 1], 0.0) / k.tau);
+      v = start ? p[t] : p[t] + (v - p[t]) * decay;
+      p[t] = (1.0 - k.c) * p[t] + k.c * v;
+    }
+  };
+}
+
 // Readings in one memory state against the lag their path would leave (lag_signature): the
 // feature is a Kelvin element's departure from the folds' mean prediction, tau two reading
 // steps (one choice, not a search, so the p-value stands as drawn). The mean prediction reads
@@ -258,20 +274,17 @@ Finding prony_creep(Context& ctx, double hold) {
 // fitted, not measured, so correlated sensor noise does not enter it.
 Signature lag_in_memory_states(const Context& ctx, double step) {
   const Record& rec = ctx.rec;
-  std::vector<double> mean(rec.size(), 0.0);
+  Eigen::VectorXd mean = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(rec.size()));
   for (const FoldFit& fit : ctx.by_fold) {
     for (std::size_t t = 0; t < rec.size(); ++t)
-      mean[t] += fit.pred[t] / static_cast<double>(ctx.by_fold.size());
+      mean[static_cast<Eigen::Index>(t)] += fit.pred[t] / static_cast<double>(ctx.by_fold.size());
   }
-  const double tau = kLagSignatureSteps * step;
+  Eigen::VectorXd v = mean;  // the element whole (c = 1): v itself
+  kelvin_filter(rec, {1.0, kLagSignatureSteps * step})(v);
   std::vector<double> lag(rec.size());
-  double v = 0.0;
   for (std::size_t t = 0; t < rec.size(); ++t) {
-    const bool start = t == 0 || rec.seg[t] != rec.seg[t - 1];
-    const double decay =
-        start ? 0.0 : std::exp(-std::max(rec.time[t] - rec.time[t - 1], 0.0) / tau);
-    v = start ? mean[t] : mean[t] + (v - mean[t]) * decay;
-    lag[t] = v - mean[t];
+    const auto i = static_cast<Eigen::Index>(t);
+    lag[t] = v[i] - mean[i];
   }
   return lag_signature(rec, lag, ctx.floor);
 }
@@ -329,19 +342,6 @@ Finding kelvin_creep(Context& ctx) {
       }
     }
   }
-  auto filter_for = [&rec](Kelvin k) {
-    return [&rec, k](Eigen::Ref<Eigen::VectorXd> p) {
-      double v = 0.0;
-      for (Eigen::Index t = 0; t < p.size(); ++t) {
-        const auto i = static_cast<std::size_t>(t);
-        const bool start = i == 0 || rec.seg[i] != rec.seg[i - 1];
-        const double decay =
-            start ? 0.0 : std::exp(-std::max(rec.time[i] - rec.time[i - 1], 0.0) / k.tau);
-        v = start ? p[t] : p[t] + (v - p[t]) * decay;
-        p[t] = (1.0 - k.c) * p[t] + k.c * v;
-      }
-    };
-  };
   std::string chosen;
   int creeping_folds = 0;  // folds whose training rows chose a creep fraction c > 0
   Finding f = model_finding(
@@ -351,14 +351,15 @@ Finding kelvin_creep(Context& ctx) {
         std::vector<double> best_p = ctx.by_fold[static_cast<std::size_t>(k)].pred;
         // Each candidate's training error (chosen on one grid, then refitted), on worker threads.
         const auto sse = [&](const Kelvin& kv) {
-          return training_sse(rec.y, ctx.base.fit(train, {filter_for(kv), nullptr, true}).pred,
-                              train);
+          return training_sse(
+              rec.y, ctx.base.fit(train, {kelvin_filter(rec, kv), nullptr, true}).pred, train);
         };
         const Kelvin best_k =
             choose_kelvin(candidates, tau_max, train, ctx.base.options().threads, sse);
         if (best_k.c > 0.0) ++creeping_folds;
-        best_p = best_k.c > 0.0 ? ctx.base.fit(train, {filter_for(best_k), nullptr, false}).pred
-                                : ctx.by_fold[static_cast<std::size_t>(k)].pred;
+        best_p = best_k.c > 0.0
+                     ? ctx.base.fit(train, {kelvin_filter(rec, best_k), nullptr, false}).pred
+                     : ctx.by_fold[static_cast<std::size_t>(k)].pred;
         chosen +=
             fmt::format("{}c {:g}, tau {:.3g} s", chosen.empty() ? "" : "; ", best_k.c, best_k.tau);
         return best_p;
@@ -397,7 +398,7 @@ Finding kelvin_creep(Context& ctx) {
   // on (hold_signature; measured, session 69: a clean first-generator record read three times
   // per hold under AR(1) noise, rho 0.5, seed 9602, was named `creep` by the lag alone).
   if (rec.input_is_load && !ctx.holds.available) {
-    if (!ctx.lag.available) ctx.lag = lag_in_memory_states(ctx, step);
+    ctx.lag = lag_in_memory_states(ctx, step);
     if (ctx.lag.available) {
       f.evidence += "; " + describe_lag(ctx.lag);
       // Intersection-union: the lag in readings of one memory state at alpha, the element

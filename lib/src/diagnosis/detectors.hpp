@@ -46,8 +46,8 @@ struct Context {
   Signature congruency, holds;
   Signature congruency_robust;  ///< the same, blind to single readings off their neighbours
   Signature dwell;  ///< creep with one reading per hold: residuals against the hold times
-  /// Load tests: readings in one memory state against the lag their path would leave (creep;
-  /// lag_signature in signatures.hpp, computed by detect_creep).
+  /// Load tests read once per hold: readings in one memory state against the lag their path
+  /// would leave (creep; lag_signature in signatures.hpp, computed by detect_creep).
   Signature lag;
   Signature coupling;  ///< the loop shape changing with the load (detect_load_shape_coupling)
   /// Creep with readings during holds named by the Kelvin element's held-out gain while the

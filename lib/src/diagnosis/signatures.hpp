@@ -64,8 +64,9 @@ ReturnPointSignatures return_point_signatures(const Record& rec, double sigma);
 /// Creep read where a rate-independent model cannot take it up: readings in one memory state
 /// must read the same, while a lag leaves each reading short of its value by what the recent
 /// path moved. `lag` per row: a Kelvin element's departure from a rate-independent prediction
-/// (v - p, v relaxing towards p). The pairs' differences regressed on its difference beside
-/// the return-point columns; one-sided (a lag, not a lead).
+/// (v - p, v relaxing towards p). The differences of the return-point pairs across which the
+/// running maximum did not grow, regressed on its difference beside the time columns;
+/// one-sided (a lag, not a lead).
 Signature lag_signature(const Record& rec, const std::vector<double>& lag, double sigma);
 /// Minor loops between the same extrema after different histories: does the difference of two
 /// branches change along them? `raw` is the calibrated test; `robust` reads that change through
