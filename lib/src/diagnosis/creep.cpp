@@ -281,12 +281,8 @@ Signature lag_in_memory_states(const Context& ctx, double step) {
   }
   Eigen::VectorXd v = mean;  // the element whole (c = 1): v itself
   kelvin_filter(rec, {1.0, kLagSignatureSteps * step})(v);
-  std::vector<double> lag(rec.size());
-  for (std::size_t t = 0; t < rec.size(); ++t) {
-    const auto i = static_cast<Eigen::Index>(t);
-    lag[t] = v[i] - mean[i];
-  }
-  return lag_signature(rec, lag, ctx.floor);
+  const Eigen::VectorXd lag = v - mean;
+  return lag_signature(rec, std::vector<double>(lag.data(), lag.data() + lag.size()), ctx.floor);
 }
 
 std::string describe_lag(const Signature& s) {

@@ -927,10 +927,10 @@ Finding detect_outliers(Context& ctx) {
       std::isnan(identified_gain) ? f.gain_pct : std::max(f.gain_pct, identified_gain);
   const bool costs_identified =
       !std::isnan(identified_gain) && identified_gain <= -ctx.opt.min_gain_pct;
-  const bool gains = confirmed > 0 || (zmax > kSure   ? firm_gain > -1.0 && !costs_identified
-                                       : zmax > kFirm ? firm_gain > 1.0 && !costs_identified
-                                                      : f.gain_pct >= ctx.opt.min_gain_pct &&
-                                                            gain_p < ctx.opt.gain_alpha);
+  const bool firm_gains = !costs_identified && firm_gain > (zmax > kSure ? -1.0 : 1.0);
+  const bool gains = confirmed > 0 || (zmax > kFirm ? firm_gains
+                                                    : f.gain_pct >= ctx.opt.min_gain_pct &&
+                                                          gain_p < ctx.opt.gain_alpha);
   f.detected = count > 0 && f.p_value < ctx.opt.alpha && gains;
   if (count > 0) f.flagged = flagged;
   f.evidence = fmt::format(
