@@ -480,6 +480,169 @@ Eigen::VectorXd running_median3(const Eigen::VectorXd& d) {
   return m;
 }
 
+// Pairs of monotone branches from the same turning value after different histories, as
+// congruency_signatures compares them: per reading of B, d(u) = y_B(u) - y_A(u).
+struct Point {
+  std::size_t t, t0, t1;  // B's reading; A's two readings about its input
+  double f, x, d;         // A interpolated as (1 - f) y[t0] + f y[t1]; position; difference
+};
+struct Pair {
+  std::vector<Point> pts;
+  Eigen::Index degree;
+  Eigen::VectorXd smoothed;  // d through a running median of three
+};
+
+// Least squares of `y` on `V`, whitened by `T`, under the exact constraints
+// U0^T V beta = U0^T y: beta = beta0 + N gamma (N spanning the constraints' null space). The
+// residual sum of squares and the number of free coefficients the data determine.
+struct Fit {
+  double rss;
+  Eigen::Index rank;
+};
+Fit constrained_fit(const Eigen::MatrixXd& T, const Eigen::MatrixXd& U0, const Eigen::MatrixXd& V,
+                    const Eigen::VectorXd& y) {
+  Eigen::VectorXd beta0 = Eigen::VectorXd::Zero(V.cols());
+  Eigen::MatrixXd N = Eigen::MatrixXd::Identity(V.cols(), V.cols());
+  if (U0.cols() > 0) {
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(U0.transpose() * V,
+                                                Eigen::ComputeFullU | Eigen::ComputeFullV);
+    const Eigen::VectorXd& sv = svd.singularValues();
+    Eigen::Index rc = 0;
+    for (Eigen::Index i = 0; i < sv.size(); ++i) rc += sv[i] > 1e-9 * sv[0] ? 1 : 0;
+    beta0 =
+        svd.matrixV().leftCols(rc) *
+        (svd.matrixU().leftCols(rc).transpose() * (U0.transpose() * y)).cwiseQuotient(sv.head(rc));
+    N = svd.matrixV().rightCols(V.cols() - rc);
+  }
+  const Eigen::VectorXd z = T * (y - V * beta0);
+  const Eigen::MatrixXd W = T * V * N;
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(W);
+  return Fit{(z - W * qr.solve(z)).squaredNorm(), qr.rank()};
+}
+
+// One group's statistics, by generalised least squares. The differences are not independent:
+// a branch enters every pair it is A or B of (on repeated minor loops, one earlier branch is
+// A to two later ones, and a B is the next pair's A), and a turning reading ends one pair's
+// B and starts the next's. Read as independent, their slopes counted a shared branch's noise
+// twice (measured: 2 022 clean first-generator records of minor loops, 3.6 % of p-values
+// below 0.01 and 0.8 % below 0.001). With independent readings of one variance s^2, the
+// differences' covariance is s^2 M M^T, M the map from readings to differences (B's reading
+// minus A's one or two); whitened by it, the change along the branches (a fit per pair
+// against a constant per pair) and the scatter about it are chi-square and independent, in
+// units of s^2: F, exactly, for Gaussian noise.
+struct Group {
+  double explained = 0.0, sse = 0.0;
+  int terms = 0, pairs = 0, dof = 0;
+  Group& operator+=(const Group& o) {
+    explained += o.explained;
+    sse += o.sse;
+    terms += o.terms;
+    pairs += o.pairs;
+    dof += o.dof;
+    return *this;
+  }
+};
+// `robust`: what changes along the branch read off d smoothed by a running median of three.
+// Smoothed pair by pair, the differences no longer share their readings' noise as M says
+// (whitened, a congruent record's smoothed d read 32 % of p-values below 0.05), so that reading
+// takes the pairs as independent, each difference of variance 2 s^2, with the scatter of
+// the raw d: conservative where no reading is shared, and a check beside the raw test.
+Group gls_group(const std::vector<Pair>& ps, bool robust) {
+  Group g;
+  std::vector<const Point*> pts;
+  Eigen::Index p1 = 0;
+  for (const Pair& p : ps) {
+    for (const Point& pt : p.pts) pts.push_back(&pt);
+    p1 += p.degree + 1;
+  }
+  const auto n = static_cast<Eigen::Index>(pts.size());
+  const auto np = static_cast<Eigen::Index>(ps.size());
+  if (np == 0) return g;
+  auto coefs = [](const Point& pt) {
+    std::map<std::size_t, double> c{{pt.t, 1.0}};
+    c[pt.t0] -= 1.0 - pt.f;
+    c[pt.t1] -= pt.f;
+    return c;
+  };
+  std::vector<std::map<std::size_t, double>> m;
+  for (const Point* pt : pts) m.push_back(coefs(*pt));
+  Eigen::MatrixXd S(n, n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    for (Eigen::Index j = 0; j <= i; ++j) {
+      double s = 0.0;
+      for (const auto& [t, c] : m[static_cast<std::size_t>(i)]) {
+        const auto it = m[static_cast<std::size_t>(j)].find(t);
+        if (it != m[static_cast<std::size_t>(j)].end()) s += c * it->second;
+      }
+      S(i, j) = S(j, i) = robust ? (i == j ? 2.0 : 0.0) : s;
+    }
+  }
+  // A difference entered twice (the turning reading that ends one pair's B starts the next
+  // pair's, against one turning reading of A) is one observation, not two: S is singular
+  // there, and the data carry no noise along its null space. Those directions are exact:
+  // they tie the two pairs' fits at the shared reading (under congruency the two pairs'
+  // constants are equal), a constraint on either model; the rest is whitened on the range
+  // of S. (Across the two groups the tie is not made: an aligned pair's exact differences
+  // would pin an interpolated pair whose interpolation errs by 1 % of the range, measured:
+  // 137 of 525 noise-free clean first-generator minor-loop records below p = 0.05.)
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(S);
+  const Eigen::VectorXd& lambda = eig.eigenvalues();
+  const double cut = 1e-9 * lambda.maxCoeff();
+  Eigen::Index r = 0;
+  for (Eigen::Index i = 0; i < n; ++i) r += lambda[i] > cut ? 1 : 0;
+  const Eigen::MatrixXd T =
+      (eig.eigenvectors().rightCols(r) * lambda.tail(r).cwiseSqrt().cwiseInverse().asDiagonal())
+          .transpose();
+  const Eigen::MatrixXd U0 = eig.eigenvectors().leftCols(n - r);
+  Eigen::MatrixXd V1 = Eigen::MatrixXd::Zero(n, p1), V0 = Eigen::MatrixXd::Zero(n, np);
+  Eigen::VectorXd D(n), Ds(n);
+  Eigen::Index row = 0, col = 0;
+  for (Eigen::Index k = 0; k < np; ++k) {
+    const Pair& p = ps[static_cast<std::size_t>(k)];
+    for (std::size_t i = 0; i < p.pts.size(); ++i, ++row) {
+      D[row] = p.pts[i].d;
+      Ds[row] = p.smoothed[static_cast<Eigen::Index>(i)];
+      V0(row, k) = 1.0;
+      for (Eigen::Index e = 0; e <= p.degree; ++e)
+        V1(row, col + e) = std::pow(p.pts[i].x, static_cast<double>(e));
+    }
+    col += p.degree + 1;
+  }
+  auto fit = [&](const Eigen::MatrixXd& V, const Eigen::VectorXd& y) {
+    return constrained_fit(T, U0, V, y);
+  };
+  const Fit h1 = fit(V1, D), h0 = fit(V0, D);
+  g.sse = h1.rss;
+  g.explained =
+      robust ? std::max(0.0, fit(V0, Ds).rss - fit(V1, Ds).rss) : std::max(0.0, h0.rss - h1.rss);
+  g.dof = static_cast<int>(r - h1.rank);
+  g.terms = static_cast<int>(h1.rank - h0.rank);
+  g.pairs = static_cast<int>(np);
+  return g;
+}
+
+// The covariance is dense within a block, so a block holds at most kBlock differences (cost
+// cubic in them); pairs beyond it start the next block, across which their correlation is
+// not taken up (a record of many minor loops, not the common case: 1 950 records on disk have
+// at most 29 pairs).
+constexpr std::size_t kBlock = 600;
+Group in_blocks(const std::vector<Pair>& ps, bool robust) {
+  Group g;
+  std::vector<Pair> block;
+  std::size_t size = 0;
+  for (const Pair& p : ps) {
+    if (size + p.pts.size() > kBlock && !block.empty()) {
+      g += gls_group(block, robust);
+      block.clear();
+      size = 0;
+    }
+    block.push_back(p);
+    size += p.pts.size();
+  }
+  if (!block.empty()) g += gls_group(block, robust);
+  return g;
+}
+
 }  // namespace
 
 CongruencySignatures congruency_signatures(const Record& rec) {
@@ -517,15 +680,6 @@ CongruencySignatures congruency_signatures(const Record& rec) {
   // loops on two input grids, six aligned pairs constant to 1e-15 and two interpolated ones
   // varying by 1.1 % of the range: p = 8e-6, named `minor_loop_noncongruence` with its noise,
   // p = 0.0007, too).
-  struct Point {
-    std::size_t t, t0, t1;  // B's reading; A's two readings about its input
-    double f, x, d;         // A interpolated as (1 - f) y[t0] + f y[t1]; position; difference
-  };
-  struct Pair {
-    std::vector<Point> pts;
-    Eigen::Index degree;
-    Eigen::VectorXd smoothed;  // d through a running median of three
-  };
   std::vector<Pair> pairs[2];  // [0] aligned, [1] interpolated
   for (std::size_t q = 0; q < branches.size(); ++q) {
     const Branch& B = branches[q];
@@ -584,150 +738,6 @@ CongruencySignatures congruency_signatures(const Record& rec) {
     pair.smoothed = running_median3(D);
     pairs[interpolated ? 1 : 0].push_back(std::move(pair));
   }
-  // One group's statistics, by generalised least squares. The differences are not independent:
-  // a branch enters every pair it is A or B of (on repeated minor loops, one earlier branch is
-  // A to two later ones, and a B is the next pair's A), and a turning reading ends one pair's
-  // B and starts the next's. Read as independent, their slopes counted a shared branch's noise
-  // twice (measured: 2 022 clean first-generator records of minor loops, 3.6 % of p-values
-  // below 0.01 and 0.8 % below 0.001). With independent readings of one variance s^2, the
-  // differences' covariance is s^2 M M^T, M the map from readings to differences (B's reading
-  // minus A's one or two); whitened by it, the change along the branches (a fit per pair
-  // against a constant per pair) and the scatter about it are chi-square and independent, in
-  // units of s^2: F, exactly, for Gaussian noise.
-  struct Group {
-    double explained = 0.0, sse = 0.0;
-    int terms = 0, pairs = 0, dof = 0;
-    Group& operator+=(const Group& o) {
-      explained += o.explained;
-      sse += o.sse;
-      terms += o.terms;
-      pairs += o.pairs;
-      dof += o.dof;
-      return *this;
-    }
-  };
-  // `robust`: what changes along the branch read off d smoothed by a running median of three.
-  // Smoothed pair by pair, the differences no longer share their readings' noise as M says
-  // (whitened, a congruent record's smoothed d read 32 % of p-values below 0.05), so that reading
-  // takes the pairs as independent, each difference of variance 2 s^2, with the scatter of
-  // the raw d: conservative where no reading is shared, and a check beside the raw test.
-  auto group_of = [](const std::vector<Pair>& ps, bool robust) {
-    Group g;
-    std::vector<const Point*> pts;
-    Eigen::Index p1 = 0;
-    for (const Pair& p : ps) {
-      for (const Point& pt : p.pts) pts.push_back(&pt);
-      p1 += p.degree + 1;
-    }
-    const auto n = static_cast<Eigen::Index>(pts.size());
-    const auto np = static_cast<Eigen::Index>(ps.size());
-    if (np == 0) return g;
-    auto coefs = [](const Point& pt) {
-      std::map<std::size_t, double> c{{pt.t, 1.0}};
-      c[pt.t0] -= 1.0 - pt.f;
-      c[pt.t1] -= pt.f;
-      return c;
-    };
-    std::vector<std::map<std::size_t, double>> m;
-    for (const Point* pt : pts) m.push_back(coefs(*pt));
-    Eigen::MatrixXd S(n, n);
-    for (Eigen::Index i = 0; i < n; ++i) {
-      for (Eigen::Index j = 0; j <= i; ++j) {
-        double s = 0.0;
-        for (const auto& [t, c] : m[static_cast<std::size_t>(i)]) {
-          const auto it = m[static_cast<std::size_t>(j)].find(t);
-          if (it != m[static_cast<std::size_t>(j)].end()) s += c * it->second;
-        }
-        S(i, j) = S(j, i) = robust ? (i == j ? 2.0 : 0.0) : s;
-      }
-    }
-    // A difference entered twice (the turning reading that ends one pair's B starts the next
-    // pair's, against one turning reading of A) is one observation, not two: S is singular
-    // there, and the data carry no noise along its null space. Those directions are exact:
-    // they tie the two pairs' fits at the shared reading (under congruency the two pairs'
-    // constants are equal), a constraint on either model; the rest is whitened on the range
-    // of S. (Across the two groups the tie is not made: an aligned pair's exact differences
-    // would pin an interpolated pair whose interpolation errs by 1 % of the range, measured:
-    // 137 of 525 noise-free clean first-generator minor-loop records below p = 0.05.)
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(S);
-    const Eigen::VectorXd& lambda = eig.eigenvalues();
-    const double cut = 1e-9 * lambda.maxCoeff();
-    Eigen::Index r = 0;
-    for (Eigen::Index i = 0; i < n; ++i) r += lambda[i] > cut ? 1 : 0;
-    const Eigen::MatrixXd T =
-        (eig.eigenvectors().rightCols(r) * lambda.tail(r).cwiseSqrt().cwiseInverse().asDiagonal())
-            .transpose();
-    const Eigen::MatrixXd U0 = eig.eigenvectors().leftCols(n - r);
-    Eigen::MatrixXd V1 = Eigen::MatrixXd::Zero(n, p1), V0 = Eigen::MatrixXd::Zero(n, np);
-    Eigen::VectorXd D(n), Ds(n);
-    Eigen::Index row = 0, col = 0;
-    for (Eigen::Index k = 0; k < np; ++k) {
-      const Pair& p = ps[static_cast<std::size_t>(k)];
-      for (std::size_t i = 0; i < p.pts.size(); ++i, ++row) {
-        D[row] = p.pts[i].d;
-        Ds[row] = p.smoothed[static_cast<Eigen::Index>(i)];
-        V0(row, k) = 1.0;
-        for (Eigen::Index e = 0; e <= p.degree; ++e)
-          V1(row, col + e) = std::pow(p.pts[i].x, static_cast<double>(e));
-      }
-      col += p.degree + 1;
-    }
-    // Least squares of `y` on `V` under the exact constraints U0^T V beta = U0^T y, whitened:
-    // beta = beta0 + N gamma (N spanning the constraints' null space). The residual sum of
-    // squares and the number of free coefficients the data determine.
-    struct Fit {
-      double rss;
-      Eigen::Index rank;
-    };
-    auto fit = [&](const Eigen::MatrixXd& V, const Eigen::VectorXd& y) {
-      Eigen::VectorXd beta0 = Eigen::VectorXd::Zero(V.cols());
-      Eigen::MatrixXd N = Eigen::MatrixXd::Identity(V.cols(), V.cols());
-      if (U0.cols() > 0) {
-        const Eigen::JacobiSVD<Eigen::MatrixXd> svd(U0.transpose() * V,
-                                                    Eigen::ComputeFullU | Eigen::ComputeFullV);
-        const Eigen::VectorXd& sv = svd.singularValues();
-        Eigen::Index rc = 0;
-        for (Eigen::Index i = 0; i < sv.size(); ++i) rc += sv[i] > 1e-9 * sv[0] ? 1 : 0;
-        beta0 = svd.matrixV().leftCols(rc) *
-                (svd.matrixU().leftCols(rc).transpose() * (U0.transpose() * y))
-                    .cwiseQuotient(sv.head(rc));
-        N = svd.matrixV().rightCols(V.cols() - rc);
-      }
-      const Eigen::VectorXd z = T * (y - V * beta0);
-      const Eigen::MatrixXd W = T * V * N;
-      const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(W);
-      return Fit{(z - W * qr.solve(z)).squaredNorm(), qr.rank()};
-    };
-    const Fit h1 = fit(V1, D), h0 = fit(V0, D);
-    g.sse = h1.rss;
-    g.explained =
-        robust ? std::max(0.0, fit(V0, Ds).rss - fit(V1, Ds).rss) : std::max(0.0, h0.rss - h1.rss);
-    g.dof = static_cast<int>(r - h1.rank);
-    g.terms = static_cast<int>(h1.rank - h0.rank);
-    g.pairs = static_cast<int>(np);
-    return g;
-  };
-  // The covariance is dense within a block, so a block holds at most kBlock differences (cost
-  // cubic in them); pairs beyond it start the next block, across which their correlation is
-  // not taken up (a record of many minor loops, not the common case: 1 950 records on disk have
-  // at most 29 pairs).
-  constexpr std::size_t kBlock = 600;
-  auto blocks_of = [&](const std::vector<Pair>& ps, bool robust) {
-    Group g;
-    std::vector<Pair> block;
-    std::size_t size = 0;
-    for (const Pair& p : ps) {
-      if (size + p.pts.size() > kBlock && !block.empty()) {
-        g += group_of(block, robust);
-        block.clear();
-        size = 0;
-      }
-      block.push_back(p);
-      size += p.pts.size();
-    }
-    if (!block.empty()) g += group_of(block, robust);
-    return g;
-  };
   CongruencySignatures out;
   out.raw.what = "monotone branches from the same turning value after different histories";
   out.robust.what = out.raw.what + " (spike-robust)";
@@ -774,7 +784,7 @@ CongruencySignatures congruency_signatures(const Record& rec) {
   // non-congruence itself scatters the interpolated pairs about their fits, this costs it
   // (the rig: 2 of those 12 named, not 5; docs/diagnose-log.md, "Session 72").
   auto combine = [&](Signature& s, bool robust) {
-    const Group groups[2] = {blocks_of(pairs[0], robust), blocks_of(pairs[1], robust)};
+    const Group groups[2] = {in_blocks(pairs[0], robust), in_blocks(pairs[1], robust)};
     Group pooled = groups[0];
     pooled += groups[1];
     if (pooled.pairs == 0 || pooled.dof < 8) return;
