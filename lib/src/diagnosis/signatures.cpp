@@ -558,25 +558,22 @@ Group gls_group(const std::vector<Pair>& ps, bool robust) {
   const auto n = static_cast<Eigen::Index>(pts.size());
   const auto np = static_cast<Eigen::Index>(ps.size());
   if (np == 0) return g;
-  auto coefs = [](const Point& pt) {
-    std::map<std::size_t, double> c{{pt.t, 1.0}};
-    c[pt.t0] -= 1.0 - pt.f;
-    c[pt.t1] -= pt.f;
-    return c;
-  };
-  std::vector<std::map<std::size_t, double>> m;
-  for (const Point* pt : pts) m.push_back(coefs(*pt));
-  Eigen::MatrixXd S(n, n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    for (Eigen::Index j = 0; j <= i; ++j) {
-      double s = 0.0;
-      for (const auto& [t, c] : m[static_cast<std::size_t>(i)]) {
-        const auto it = m[static_cast<std::size_t>(j)].find(t);
-        if (it != m[static_cast<std::size_t>(j)].end()) s += c * it->second;
-      }
-      S(i, j) = S(j, i) = robust ? (i == j ? 2.0 : 0.0) : s;
-    }
+  // M maps the readings the group reads to its differences (B's reading minus A's one or two);
+  // the differences' covariance is s^2 M M^T.
+  std::map<std::size_t, Eigen::Index> column;
+  for (const Point* pt : pts) {
+    for (std::size_t t : {pt->t, pt->t0, pt->t1})
+      column.emplace(t, static_cast<Eigen::Index>(column.size()));
   }
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n, static_cast<Eigen::Index>(column.size()));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Point& pt = *pts[static_cast<std::size_t>(i)];
+    M(i, column[pt.t]) += 1.0;
+    M(i, column[pt.t0]) -= 1.0 - pt.f;
+    M(i, column[pt.t1]) -= pt.f;
+  }
+  const Eigen::MatrixXd S = robust ? Eigen::MatrixXd(2.0 * Eigen::MatrixXd::Identity(n, n))
+                                   : Eigen::MatrixXd(M * M.transpose());
   // A difference entered twice (the turning reading that ends one pair's B starts the next
   // pair's, against one turning reading of A) is one observation, not two: S is singular
   // there, and the data carry no noise along its null space. Those directions are exact:
