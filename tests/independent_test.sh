@@ -262,6 +262,12 @@
 #   gained 0.4 % on every other held-out reading and cost 10.7 % on the 77 whose memory both
 #   trainings identified: the readings the baseline needs where it knows the memory are no
 #   spikes (`none`).
+# - Session 73: moving Preisach models named `none` (and one `drift`) while that extension was
+#   named by its gain alone, now by the map's routes too: a first-generator record under a
+#   0.04 mm step (seed 50006: the moving model gaining 5.5 % at p = 0.003, the signature at
+#   p = 0.0037) and a fourth-generator one (seed 70076: 3.1 % at p = 0.002, signature 0.013),
+#   both confirmed by the signature at gain_alpha; a fifth-generator Bouc-Wen loop (seed 70180,
+#   `drift` before: signature 0.0036, the moving model gaining 6.4 % at p = 0.020).
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -382,6 +388,9 @@ make_cases c c 1 9622 load-creep
 make_cases d d 1 9600 load-creep
 make_cases a a 1 9620 load-minor_loop_noncongruence
 make_cases e e 1 9839 load-none
+make_cases a a 1 50006 load-minor_loop_noncongruence
+make_cases d d 1 70076 load-minor_loop_noncongruence
+make_cases e e 1 70180 load-minor_loop_noncongruence
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -513,5 +522,8 @@ expect "$work/c/load-creep-9622.csv" creep
 expect "$work/d/load-creep-9600.csv" creep
 expect "$work/a/load-minor_loop_noncongruence-9620.csv" minor_loop_noncongruence
 expect "$work/e/load-none-9839.csv" none
+expect "$work/a/load-minor_loop_noncongruence-50006.csv" minor_loop_noncongruence
+expect "$work/d/load-minor_loop_noncongruence-70076.csv" minor_loop_noncongruence
+expect "$work/e/load-minor_loop_noncongruence-70180.csv" minor_loop_noncongruence
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]
