@@ -82,6 +82,10 @@ struct Kelvin {
 // the third generator to `none`, held-out gain 15.3 % to -2.1 %, and named a fourth-generator
 // voltage drift `creep`).
 constexpr double kMaxCreep = 0.8;
+/// Pairs of readings in one memory state on which the lag signature's silence denies creep
+/// known by a Kelvin element's gain.
+constexpr int kLagPairsToDeny = 10;
+
 /// The lag signature's Kelvin element: its time constant in reading steps (lag_in_memory_states).
 constexpr double kLagSignatureSteps = 2.0;
 Kelvin refine_kelvin(Kelvin best, double best_sse, double tau_max, double train_rows, int threads,
@@ -403,6 +407,19 @@ Finding kelvin_creep(Context& ctx) {
           f.gain_pct >= ctx.opt.min_gain_pct) {
         f.detected = true;
         f.evidence += "; named by the lag in readings of one memory state and this gain";
+      }
+      // And not by the element's gain where that lag, read on enough pairs, shows nothing: a
+      // lag large enough to gain on held-out cycles moves readings of one memory state apart
+      // by their paths, while a baseline's misfit that an element takes up does not (measured,
+      // session 73: a clean first-generator record, fresh seed 50020, L = 8, the element gaining
+      // 5.2 % at p = 0.005 with the lag at p = 0.36 on 17 pairs; eleven drifts of four
+      // generators with the element detected, lag at p = 0.40-0.85 on 11-148 pairs; every
+      // creep of session 73's fresh set named with the lag read on 10 or more pairs had it
+      // below 0.007). Fewer pairs leave the lag too weak to deny (a fifth-generator creep,
+      // seed 50019, at p = 0.092 on 5).
+      if (f.detected && ctx.lag.units >= kLagPairsToDeny && ctx.lag.p_value > ctx.opt.gain_alpha) {
+        f.detected = false;
+        f.evidence += "; not named: the lag in readings of one memory state does not show";
       }
     }
   }
