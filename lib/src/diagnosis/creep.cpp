@@ -412,7 +412,7 @@ Finding kelvin_creep(Context& ctx) {
       // lag large enough to gain on held-out cycles moves readings of one memory state apart
       // by their paths, while a baseline's misfit that an element takes up does not (measured,
       // session 73: a clean first-generator record, fresh seed 50020, L = 8, the element gaining
-      // 5.2 % at p = 0.005 with the lag at p = 0.36 on 17 pairs; eleven drifts of four
+      // 5.2 % at p = 0.005 with the lag at p = 0.36 on 17 pairs; ten drifts of four
       // generators with the element detected, lag at p = 0.40-0.85 on 11-148 pairs; every
       // creep of session 73's fresh set named with the lag read on 10 or more pairs had it
       // below 0.007). Fewer pairs leave the lag too weak to deny (a fifth-generator creep,
