@@ -134,9 +134,8 @@ Finding detect_noncongruence(Context& ctx) {
     const bool gains = f.gain_pct >= ctx.opt.min_gain_pct;
     const bool confirmed =
         gain_p < ctx.opt.alpha && sig.p_value < ctx.opt.gain_alpha && f.gain_pct > 0.0;
-    f.detected =
-        confirmed || (gains && ((gain_p < ctx.opt.alpha && !ctx.step_dominates()) ||
-                                (sig.p_value < ctx.opt.alpha && gain_p < ctx.opt.gain_alpha)));
+    const bool by_gain = gains && gain_p < ctx.opt.alpha && !ctx.step_dominates();
+    const bool by_signature = gains && sig.p_value < ctx.opt.alpha && gain_p < ctx.opt.gain_alpha;
     // The moving model by the same routes as the map, except the signature's with a gain at
     // gain_alpha where the step dominates. Until session 73 it was named by its gain alone (at
     // alpha, where the step does not dominate): with the signature's routes it named a clean
@@ -151,11 +150,8 @@ Finding detect_noncongruence(Context& ctx) {
     // screen's scales): below it the error is the grid's discretisation, which a warped input
     // takes up as well as any effect (measured: a noise-free clean rig record, seed 1099, the
     // baseline at 0.068 % on identified readings, the moving model gaining 23 % at p = 0.001).
-    if (!map)
-      f.detected = f.heldout_rms_before >= kLeastStructurePct &&
-                   (confirmed || (gains && !ctx.step_dominates() &&
-                                  (gain_p < ctx.opt.alpha ||
-                                   (sig.p_value < ctx.opt.alpha && gain_p < ctx.opt.gain_alpha))));
+    f.detected = (confirmed || by_gain || (by_signature && (map || !ctx.step_dominates()))) &&
+                 (map || f.heldout_rms_before >= kLeastStructurePct);
     return f;
   };
   Finding by_map = family(true);
