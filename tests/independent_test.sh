@@ -271,6 +271,11 @@
 #   first-generator record (seed 50020, one reading per hold, L = 8) named `creep` on a Kelvin
 #   element's gain of 5.2 % while the lag in readings of one memory state stood at p = 0.36 on
 #   17 pairs: that lag now denies the gain (`none`).
+# - Session 74: spikes smaller than their ramp's step, inside the interval of their neighbours
+#   (no monotone branch broken), named `none`: a third-generator record (seed 50001, 7.7 % of
+#   the range at 0.25 % noise, read at 12-30 points per ramp, by the pattern 12.6 scales off),
+#   a fourth-generator one (seed 50007, 11.9) and a second-generator one (seed 80050, 16.9):
+#   `outliers`.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -395,6 +400,9 @@ make_cases a a 1 50006 load-minor_loop_noncongruence
 make_cases d d 1 70076 load-minor_loop_noncongruence
 make_cases e e 1 70180 load-minor_loop_noncongruence
 make_cases a a 1 50020 load-none
+make_cases c c 1 50001 load-outliers
+make_cases d d 1 50007 load-outliers
+make_cases b b 1 80050 load-outliers
 pass=0
 fail=0
 expect() {  # expect FILE CAUSE
@@ -530,5 +538,8 @@ expect "$work/a/load-minor_loop_noncongruence-50006.csv" minor_loop_noncongruenc
 expect "$work/d/load-minor_loop_noncongruence-70076.csv" minor_loop_noncongruence
 expect "$work/e/load-minor_loop_noncongruence-70180.csv" minor_loop_noncongruence
 expect "$work/a/load-none-50020.csv" none
+expect "$work/c/load-outliers-50001.csv" outliers
+expect "$work/d/load-outliers-50007.csv" outliers
+expect "$work/b/load-outliers-80050.csv" outliers
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]

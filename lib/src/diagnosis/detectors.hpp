@@ -185,7 +185,9 @@ OutlierScreen screen_outliers(const Context& ctx);
 /// interpolation), a reading at a turning value of the input that is not the response's
 /// extreme among its neighbours, a run of two or three readings inside a ramp outside the
 /// interval of the readings either side, a reading at a turning value whose two steps both
-/// exceed every other pass's change over their inputs (session 64). In units of the noise along the
+/// exceed every other pass's change over their inputs (session 64), a reading inside a ramp off
+/// its neighbours' interpolation while they lie off theirs the other way, by its weights in
+/// them (a spike smaller than the ramp's step; session 74). In units of the noise along the
 /// ramps (outliers.cpp); nothing within two sensor steps (`resolution`) counts.
 std::vector<double> ramp_scores(const Record& rec, double resolution);
 Finding detect_outliers(Context& ctx);
