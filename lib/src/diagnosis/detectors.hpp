@@ -61,6 +61,10 @@ struct Context {
   /// (detect_drift, tests held out by load segment): a trend no map of the load makes, so an
   /// offset nonlinearity yields to it (cause.cpp).
   bool drift_within_segments = false;
+  /// The flagged readings' removal gain the outliers finding was judged by (detect_outliers):
+  /// on every other held-out reading, or on those whose memory both trainings identified where
+  /// that is larger (% ; 0 where nothing was flagged).
+  double outliers_removal_gain = 0.0;
   /// Held-out readings whose memory their fold's training identified (identified_readings).
   std::vector<char> identified;
   /// Folds whose training rows chose a lonely-stroke term (detect_lonely_stroke).

@@ -998,6 +998,7 @@ Finding detect_outliers(Context& ctx) {
   const double zmax = screen.zmax;
   const double firm_gain =
       std::isnan(identified_gain) ? f.gain_pct : std::max(f.gain_pct, identified_gain);
+  ctx.outliers_removal_gain = count > 0 ? firm_gain : 0.0;
   const bool costs_identified =
       !std::isnan(identified_gain) && identified_gain <= -ctx.opt.min_gain_pct;
   const bool firm_gains = !costs_identified && firm_gain > (zmax > kSure ? -1.0 : 1.0);
