@@ -265,7 +265,9 @@ double turn_steps_excess(const Record& rec, const std::vector<Pass>& all, std::s
 /// over their weights, where the neighbours lie the other way (nothing within two sensor steps),
 /// in units of the MAD of d over the other readings in the middle of seven along a ramp (at
 /// least half a sensor step and 1e-4 of `range`); the others are those outside the reading's
-/// footprint (the spike moves d from t - 2 to t + 2), six at least. And only where the
+/// footprint (the spike moves d from t - 2 to t + 2), six at least; the reading must carry the
+/// largest amplitude in its footprint (a spike at t - 1 enters the mean d is taken off at t + 1,
+/// and made the pattern there on a rig record read at a 0.04 mm step). And only where the
 /// least-squares amplitude of the pattern stands more than kPattern scales off the others' (the
 /// RMS of their amplitudes without the largest tenth, over 0.79, that RMS's ratio to sigma for a
 /// normal, which below ten others drop none and overstate it): a response read coarsely on a relay
