@@ -315,11 +315,7 @@ std::vector<double> inside_ramp_scores(const std::vector<double>& e, const std::
       sq.push_back(amplitude[j] * amplitude[j]);
     }
     if (!largest || sq.size() < kFewest) continue;
-    std::sort(sq.begin(), sq.end());
-    const std::size_t keep = sq.size() - sq.size() / 10;
-    const double own =
-        std::sqrt(std::accumulate(sq.begin(), sq.begin() + keep, 0.0) / static_cast<double>(keep)) /
-        kNormalRatio;
+    const double own = trimmed_sigma(sq, 10, kNormalRatio);
     const double scale = std::max({mad(others), 0.5 * resolution, 1e-4 * range});
     if (std::abs(amplitude[i]) > kPattern * own) out[at[i]] = least[i] / scale;
   }
