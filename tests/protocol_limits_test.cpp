@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <functional>
 #include <string>
 #include <vector>
@@ -125,6 +126,48 @@ TEST(ProtocolLimits, LoadOrderClockAndHolds) {
   DiagnoseData unclocked = voltage_test({0.3, 0.5, 0.7, 0.9});
   unclocked.time_s.clear();
   EXPECT_EQ(effects_of(protocol_limits_of(unclocked)), (std::vector<std::string>{"drift"}));
+}
+
+// A load test that seldom returns to a memory state met before hides a drift: the return-point
+// time signature needs five such returns. Excursions 0 -> top -> 0 to distinct tops return once
+// per excursion after the first (back at the lowest load, every hysteron off); the readings at
+// the tops are each a state of their own. Four excursions hide a drift, five do not; a decaying
+// sine, each turning value met once, hides it; the same sine read through repeated cycles
+// between fixed extrema does not. Readings at varied intervals, so the clock hides no creep.
+TEST(ProtocolLimits, ALoadTestThatSeldomReturnsToAMemoryStateHidesADrift) {
+  auto load_test = [](const std::vector<double>& u) {
+    DiagnoseData d;
+    d.input_is_load = true;
+    for (std::size_t t = 0; t < u.size(); ++t) {
+      d.input.push_back(u[t]);
+      d.output.push_back(u[t]);
+      d.time_s.push_back(t == 0 ? 0.0 : d.time_s.back() + (t % 3 == 0 ? 20.0 : 10.0));
+    }
+    return d;
+  };
+  auto excursions = [](int k) {
+    std::vector<double> u{0.0};
+    for (int e = 0; e < k; ++e) {
+      u.push_back(0.5 + 0.1 * e);
+      u.push_back(0.0);
+    }
+    return u;
+  };
+  const std::vector<std::string> hidden{"lonely_stroke", "drift"}, shown{"lonely_stroke"};
+  EXPECT_EQ(effects_of(protocol_limits_of(load_test(excursions(4)))), hidden);
+  EXPECT_EQ(effects_of(protocol_limits_of(load_test(excursions(5)))), shown);
+  // Holds do not count as returns: each excursion's top read three times.
+  std::vector<double> held;
+  for (double v : excursions(4)) held.insert(held.end(), {v, v, v});
+  EXPECT_EQ(effects_of(protocol_limits_of(load_test(held))), hidden);
+
+  std::vector<double> sine, cycles;
+  for (int k = 0; k < 150; ++k) {
+    sine.push_back(0.5 + 0.45 * std::exp(-k / 60.0) * std::sin(2.0 * M_PI * k / 30.0));
+    cycles.push_back(0.5 + 0.45 * std::sin(2.0 * M_PI * k / 30.0));
+  }
+  EXPECT_EQ(effects_of(protocol_limits_of(load_test(sine))), hidden);
+  EXPECT_EQ(effects_of(protocol_limits_of(load_test(cycles))), shown);
 }
 
 }  // namespace
