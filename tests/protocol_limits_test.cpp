@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -156,15 +157,15 @@ TEST(ProtocolLimits, ALoadTestThatSeldomReturnsToAMemoryStateHidesADrift) {
   const std::vector<std::string> hidden{"lonely_stroke", "drift"}, shown{"lonely_stroke"};
   EXPECT_EQ(effects_of(protocol_limits_of(load_test(excursions(4)))), hidden);
   EXPECT_EQ(effects_of(protocol_limits_of(load_test(excursions(5)))), shown);
-  // Holds do not count as returns: each excursion's top read three times.
+  // Holds do not count as returns: every reading of the four excursions read three times.
   std::vector<double> held;
   for (double v : excursions(4)) held.insert(held.end(), {v, v, v});
   EXPECT_EQ(effects_of(protocol_limits_of(load_test(held))), hidden);
 
   std::vector<double> sine, cycles;
   for (int k = 0; k < 150; ++k) {
-    sine.push_back(0.5 + 0.45 * std::exp(-k / 60.0) * std::sin(2.0 * M_PI * k / 30.0));
-    cycles.push_back(0.5 + 0.45 * std::sin(2.0 * M_PI * k / 30.0));
+    sine.push_back(0.5 + 0.45 * std::exp(-k / 60.0) * std::sin(2.0 * std::numbers::pi * k / 30.0));
+    cycles.push_back(0.5 + 0.45 * std::sin(2.0 * std::numbers::pi * k / 30.0));
   }
   EXPECT_EQ(effects_of(protocol_limits_of(load_test(sine))), hidden);
   EXPECT_EQ(effects_of(protocol_limits_of(load_test(cycles))), shown);
