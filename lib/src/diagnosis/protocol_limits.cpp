@@ -5,10 +5,11 @@
 #include <cmath>
 #include <functional>
 #include <set>
+#include <utility>
 
 #include "scpkit/diagnosis/diagnose.hpp"
-#include "scpkit/hysteresis/preisach.hpp"
 #include "scpkit/identification/augmented_fit.hpp"
+#include "signatures.hpp"
 
 namespace scpkit {
 namespace {
@@ -39,28 +40,17 @@ std::vector<std::vector<double>> turning_values(const std::vector<double>& u,
   return out;
 }
 
-// How many readings return to a memory state met earlier in their segment: the same dominant
-// turning points and input (the last reading of each hold; back at the lowest input, every
-// hysteron off whatever came before), the pairs the return-point signatures read
-// (diagnosis/signatures.cpp, memory_states and walk).
+// How many readings return to a memory state met earlier in their segment (memory_states, the
+// keys the return-point signatures pair; the last reading of each hold, as their walk takes).
 std::size_t returns_to_memory_states(const std::vector<double>& u, const std::vector<int>& seg) {
   const auto [umin, umax] = std::minmax_element(u.begin(), u.end());
-  const double lo = *umin, span = std::max(*umax - *umin, 1e-300), tol = 1e-9 * span;
-  const PreisachGrid grid{lo, lo + span, 1};
-  PreisachState state = PreisachState::negative_saturation(grid);
-  std::set<std::vector<long>> met;
+  const double tol = 1e-9 * std::max(*umax - *umin, 1e-300);
+  const std::vector<std::vector<long>> states = diagnosis::memory_states(u, seg);
+  std::set<std::pair<int, std::vector<long>>> met;
   std::size_t returns = 0;
   for (std::size_t t = 0; t < u.size(); ++t) {
-    if (t == 0 || seg[t] != seg[t - 1]) state = PreisachState::negative_saturation(grid);
-    state.apply(u[t]);
     if (t + 1 < u.size() && seg[t + 1] == seg[t] && std::abs(u[t + 1] - u[t]) <= tol) continue;
-    std::vector<long> key{seg[t]};
-    if (std::abs(u[t] - lo) <= tol) {
-      key.push_back(-1);
-    } else {
-      for (double p : state.turning_points()) key.push_back(std::lround((p - lo) / span * 1e7));
-    }
-    if (!met.insert(std::move(key)).second) ++returns;
+    if (!met.emplace(seg[t], states[t]).second) ++returns;
   }
   return returns;
 }

@@ -45,15 +45,20 @@ struct Walk {
 }  // namespace
 
 std::vector<std::vector<long>> memory_states(const Record& rec) {
-  const auto [umin, umax] = std::minmax_element(rec.u.begin(), rec.u.end());
+  return memory_states(rec.u, rec.seg);
+}
+
+std::vector<std::vector<long>> memory_states(const std::vector<double>& u,
+                                             const std::vector<int>& seg) {
+  const auto [umin, umax] = std::minmax_element(u.begin(), u.end());
   const double lo = *umin, span = std::max(*umax - *umin, 1e-300), tol = 1e-9 * span;
   const PreisachGrid grid{lo, lo + span, 1};
   PreisachState state = PreisachState::negative_saturation(grid);
-  std::vector<std::vector<long>> keys(rec.size());
-  for (std::size_t t = 0; t < rec.size(); ++t) {
-    if (t == 0 || rec.seg[t] != rec.seg[t - 1]) state = PreisachState::negative_saturation(grid);
-    state.apply(rec.u[t]);
-    if (std::abs(rec.u[t] - lo) <= tol) {
+  std::vector<std::vector<long>> keys(u.size());
+  for (std::size_t t = 0; t < u.size(); ++t) {
+    if (t == 0 || seg[t] != seg[t - 1]) state = PreisachState::negative_saturation(grid);
+    state.apply(u[t]);
+    if (std::abs(u[t] - lo) <= tol) {
       keys[t] = {0};  // back at the lowest input: every hysteron off, whatever came before
     } else {
       for (double p : state.turning_points()) keys[t].push_back(std::lround((p - lo) / span * 1e7));

@@ -41,6 +41,10 @@ struct ReturnPointSignatures {
 /// hysteron off, whatever came before); the operator restarts with each segment. Readings
 /// with equal keys are in the same memory state.
 std::vector<std::vector<long>> memory_states(const Record& rec);
+/// The same for input `u` read in segments `seg` (a file's columns before a Record is made:
+/// protocol_limits_of).
+std::vector<std::vector<long>> memory_states(const std::vector<double>& u,
+                                             const std::vector<int>& seg);
 
 /// Whether each reading's value is fixed by what its fold trained on: a rate-independent
 /// operator's output is a sum of Everett values, one per pair of consecutive dominant turning
