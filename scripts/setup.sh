@@ -7,7 +7,7 @@ packages=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libceres-dev libboost-program-options-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  libtomlplusplus-dev nlohmann-json3-dev clang-format
+  libtomlplusplus-dev nlohmann-json3-dev clang-format clang-tidy
   python3
 )
 

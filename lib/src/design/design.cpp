@@ -109,10 +109,11 @@ DesignResult evaluate_design(const ThreadCharacterisation& ch, const Material& m
   }
   double stroke;
   if (spec.protocol_N.empty()) {
-    stroke = ws.strain[k0 + half] - ws.strain[k0];
+    const auto h = static_cast<std::size_t>(half);
+    stroke = ws.strain[k0 + h] - ws.strain[k0];
     double gap = 0.0;
-    for (int i = 0; i <= half; ++i) {
-      gap = std::max(gap, std::abs(ws.strain[k0 + 2 * half - i] - ws.strain[k0 + i]));
+    for (std::size_t i = 0; i <= h; ++i) {
+      gap = std::max(gap, std::abs(ws.strain[k0 + 2 * h - i] - ws.strain[k0 + i]));
     }
     r.hysteresis_pct = stroke != 0.0 ? 100.0 * gap / std::abs(stroke) : 0.0;
   } else {

@@ -465,9 +465,9 @@ void rank_rows(std::vector<std::string>& rows, const std::string& objective, boo
   std::vector<std::pair<Key, std::string>> keyed;
   keyed.reserve(rows.size());
   for (auto& r : rows) {
-    keyed.push_back(
-        {{field(r, feas) == "1" ? 1 : 0, number(field(r, obj)), std::stoll(field(r, 0))},
-         std::move(r)});
+    keyed.emplace_back(
+        Key{field(r, feas) == "1" ? 1 : 0, number(field(r, obj)), std::stoll(field(r, 0))},
+        std::move(r));
   }
   std::stable_sort(keyed.begin(), keyed.end(), [&](const auto& a, const auto& b) {
     if (a.first.feasible != b.first.feasible) return a.first.feasible > b.first.feasible;

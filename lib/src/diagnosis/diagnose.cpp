@@ -42,6 +42,7 @@ namespace {
 /// Held-out E_RMS (% of range) of the given readings without the largest 5 % of the residuals.
 double sustained_rms_pct(const diagnosis::Context& ctx, const std::vector<std::size_t>& rows) {
   std::vector<double> a;
+  a.reserve(rows.size());
   for (std::size_t t : rows) a.push_back(std::abs(ctx.r[t]));
   std::sort(a.begin(), a.end());
   const std::size_t keep = a.size() - a.size() / 20;

@@ -161,8 +161,10 @@ Finding detect_offset_nonlinearity(Context& ctx) {
   // one (PHYSICS.md section 5: "higher order or softplus knee"). From six loads on, the knee
   // width is chosen by leave-one-load-out over the training loads, 0 being the quadratic.
   const bool cubic = loads == kLoadsForHeldOutMaps;
-  const auto [flo, fhi] = std::minmax_element(rec.seg_load.begin(), rec.seg_load.end());
-  const double f_lo = *flo, f_scale = *fhi - *flo;
+  // Not a structured binding: the lambdas below capture the highest load, and capturing a
+  // binding is C++20 that clang-tidy 14's front end refuses.
+  const auto f_range = std::minmax_element(rec.seg_load.begin(), rec.seg_load.end());
+  const double f_lo = *f_range.first, f_hi = *f_range.second, f_scale = f_hi - f_lo;
   // The knee widths to choose from (none at five loads).
   const std::vector<double> widths =
       cubic ? std::vector<double>{} : std::vector<double>{0.0, 0.08, 0.15, 0.3};
@@ -184,7 +186,7 @@ Finding detect_offset_nonlinearity(Context& ctx) {
         for (double w : widths) {
           double err = 0.0;
           for (std::size_t i = 0; i < F.size(); ++i) {
-            if (F[i] == f_lo || F[i] == *fhi) continue;  // interpolation only
+            if (F[i] == f_lo || F[i] == f_hi) continue;  // interpolation only
             std::vector<double> Fi, Ai, Bi;
             for (std::size_t j = 0; j < F.size(); ++j) {
               if (j == i) continue;

@@ -129,7 +129,7 @@ PlyMappingDiagnosis diagnose_ply_mapping(const PlyMappingData& d, const Material
   fo.smoothness = 1e-5;
   fo.grid_shifts = 1;
   std::vector<double> lambdas;
-  for (double l = 0.7; l <= 1.3001; l += 0.05) lambdas.push_back(l);
+  for (int k = 0; k <= 12; ++k) lambdas.push_back(0.7 + 0.05 * k);  // 0.7 .. 1.3
   auto scaled = [&](bool free_lambda) -> Predict {
     return [&, free_lambda](const std::vector<char>& train) {
       PreisachFitOptions o = fo;

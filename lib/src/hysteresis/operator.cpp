@@ -16,7 +16,7 @@ double PolynomialModel::operator()(double v) const {
 }
 
 InverseStep PolynomialModel::inverse(double target, double previous) const {
-  const double c0 = coefficients.size() > 0 ? coefficients[0] : 0.0;
+  const double c0 = !coefficients.empty() ? coefficients[0] : 0.0;
   const double c1 = coefficients.size() > 1 ? coefficients[1] : 0.0;
   const double c2 = coefficients.size() > 2 ? coefficients[2] : 0.0;
   std::vector<double> roots;

@@ -36,7 +36,7 @@ PolynomialModel fit_polynomial(std::span<const double> x, std::span<const double
   p.v_min = *lo;
   p.v_max = *hi;
   // y = sum_k b_k ((x - mid)/half)^k, expanded in powers of x.
-  p.coefficients.assign(static_cast<std::size_t>(degree + 1), 0.0);
+  p.coefficients.assign(static_cast<std::size_t>(degree) + 1, 0.0);
   p.coefficients[0] =
       b[0] - b[1] * mid / half + (degree == 2 ? b[2] * mid * mid / (half * half) : 0.0);
   p.coefficients[1] = b[1] / half - (degree == 2 ? 2.0 * b[2] * mid / (half * half) : 0.0);

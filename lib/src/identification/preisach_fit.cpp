@@ -403,7 +403,8 @@ PreisachFit fit_preisach(std::span<const double> input, std::span<const double> 
   // regularisation, twice the samples with it (the smoothness term adds the rest). The unknowns
   // are the cells, the constant and, where fitted, the reversible term's coefficient.
   auto too_big = [&](int L, double lambda, bool with_reversible) {
-    const double unknowns = L * (L + 1) / 2 + 1.0 + (with_reversible ? 1.0 : 0.0);
+    const int cells = L * (L + 1) / 2;  // exact: L (L + 1) is even
+    const double unknowns = cells + 1.0 + (with_reversible ? 1.0 : 0.0);
     return unknowns > (lambda > 0.0 ? 2.0 : 0.5) * static_cast<double>(n);
   };
   std::erase_if(levels, [&](int L) {

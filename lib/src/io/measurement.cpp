@@ -346,10 +346,10 @@ Signal select_input(const Measurement& m, const std::string& wanted) {
     const MeasurementColumn* c = m.find(k.quantity);
     if (!c) continue;
     if (!wanted.empty()) {
-      const std::string w = wanted;
       const std::string stem =
           std::string(k.canonical).substr(0, std::string(k.canonical).find('_'));
-      if (w == k.canonical || w == c->name || w == stem) return {k.canonical, c->name, c->values};
+      if (wanted == k.canonical || wanted == c->name || wanted == stem)
+        return {k.canonical, c->name, c->values};
       continue;
     }
     if (column_varies(c)) present.push_back(&k);
