@@ -272,7 +272,7 @@ TEST(RampScores, ASpikeInsideItsRampIsScoredWhereTheBranchIsSmooth) {
       for (std::size_t k = t - 3; k < t + 3; ++k) one_way = one_way && up(k) == up(t);
       if (one_way) ramps.push_back(t);
     }
-    if (ramps.size() < 11) continue;  // six outside the spike's footprint of five (outliers.cpp)
+    if (ramps.size() < 11) continue;  // six outside the spike's footprint of five (ramp_scores.cpp)
     const std::size_t t = ramps[static_cast<std::size_t>(trial) % ramps.size()];
     const double sigma = noise * rec.range;
     const double step =

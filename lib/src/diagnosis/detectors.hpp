@@ -156,7 +156,7 @@ double training_sse(const std::vector<double>& y, const std::vector<double>& p,
 std::string describe(const Signature& s);
 
 // One function per named effect, each in its own file (drift.cpp, creep.cpp, lonely_stroke.cpp,
-// load_maps.cpp, noncongruence.cpp, outliers.cpp).
+// load_maps.cpp, noncongruence.cpp, outliers.cpp with its ramp scores in ramp_scores.cpp).
 
 Finding detect_drift(Context& ctx);
 Finding detect_creep(Context& ctx);
@@ -192,7 +192,7 @@ OutlierScreen screen_outliers(const Context& ctx);
 /// exceed every other pass's change over their inputs (session 64), a reading inside a ramp off
 /// its neighbours' interpolation while they lie off theirs the other way, by its weights in
 /// them (a spike smaller than the ramp's step; session 74). In units of the noise along the
-/// ramps (outliers.cpp); nothing within two sensor steps (`resolution`) counts.
+/// ramps (ramp_scores.cpp); nothing within two sensor steps (`resolution`) counts.
 std::vector<double> ramp_scores(const Record& rec, double resolution);
 Finding detect_outliers(Context& ctx);
 

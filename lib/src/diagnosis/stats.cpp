@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 
 namespace scpkit::diagnosis {
 
@@ -30,6 +31,15 @@ double rms(std::span<const double> e) {
   double s = 0.0;
   for (double x : e) s += x * x;
   return e.empty() ? 0.0 : std::sqrt(s / static_cast<double>(e.size()));
+}
+
+double trimmed_sigma(std::vector<double> sq, std::size_t drop_one_in, double ratio) {
+  std::sort(sq.begin(), sq.end());
+  const std::size_t keep = sq.size() - sq.size() / drop_one_in;
+  const double mean_sq =
+      std::accumulate(sq.begin(), sq.begin() + static_cast<std::ptrdiff_t>(keep), 0.0) /
+      static_cast<double>(keep);
+  return std::sqrt(mean_sq) / ratio;
 }
 
 double quantisation_step(std::span<const double> y) {

@@ -15,6 +15,11 @@ double median(std::vector<double> v);      ///< of an even count, the mean of th
 double mad(const std::vector<double>& v);  ///< 1.4826 median |v - median| (sigma if Gaussian)
 double rms(std::span<const double> e);
 
+/// The scatter of deviations from their squares `sq`, blind to the few that are spikes: the
+/// RMS without the largest 1 / `drop_one_in` of them, over `ratio` (that RMS's ratio to sigma
+/// for a normal: 0.871 without the largest 5 %, 0.662 without the largest 20 %).
+double trimmed_sigma(std::vector<double> sq, std::size_t drop_one_in = 20, double ratio = 0.871);
+
 /// The sums of the least-squares line y ~ c + b x, accumulated row by row.
 struct LineSums {
   double n = 0.0, sx = 0.0, sy = 0.0, sxx = 0.0, sxy = 0.0, syy = 0.0;
