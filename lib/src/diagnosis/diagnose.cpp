@@ -7,11 +7,13 @@
 #include <limits>
 #include <memory>
 #include <optional>
+#include <utility>
 
 #include "baseline.hpp"
 #include "cause.hpp"
 #include "detectors.hpp"
 #include "scpkit/error.hpp"
+#include "stats.hpp"
 
 namespace scpkit {
 
@@ -41,15 +43,11 @@ const std::vector<std::string>& effect_names() {
 namespace {
 /// Held-out E_RMS (% of range) of the given readings without the largest 5 % of the residuals.
 double sustained_rms_pct(const diagnosis::Context& ctx, const std::vector<std::size_t>& rows) {
-  std::vector<double> a;
-  a.reserve(rows.size());
-  for (std::size_t t : rows) a.push_back(std::abs(ctx.r[t]));
-  std::sort(a.begin(), a.end());
-  const std::size_t keep = a.size() - a.size() / 20;
-  double ss = 0.0;
-  for (std::size_t i = 0; i < keep; ++i) ss += a[i] * a[i];
-  return 100.0 * std::sqrt(ss / static_cast<double>(std::max<std::size_t>(keep, 1))) /
-         ctx.rec.range;
+  if (rows.empty()) return 0.0;
+  std::vector<double> sq;
+  sq.reserve(rows.size());
+  for (std::size_t t : rows) sq.push_back(ctx.r[t] * ctx.r[t]);
+  return 100.0 * diagnosis::trimmed_sigma(std::move(sq), 20, 1.0) / ctx.rec.range;
 }
 
 /// The record with its folds, the baseline and the held-out context, which refer to each other.
