@@ -426,9 +426,20 @@ Finding detect_drift(Context& ctx) {
     // 0.0088), the first named `drift` on a gain of 0.6 % (and in session 17 another, p =
     // 0.0029, gain 0.4 %), while the trend's gain reached 1 % on 16 of the 276. Of 165 drift
     // records, the one this loses (p = 0.0056, a 6 % drift gaining 0.8 %) is the only one
-    // named by the signature between alpha / 10 and alpha on a gain of 1 % or less.
+    // named by the signature between alpha / 10 and alpha on a gain of 1 % or less. At alpha the
+    // gain must also hold at gain_alpha (the intersection-union the other signatures use;
+    // session 77): over 2 200 clean load records two third-generator ones under AR(1) noise
+    // passed the signature at p = 0.0012 and 0.007 on gains of 1.1 and 2.1 % at p = 0.21, and of
+    // 265 kept records with the drift detected one true drift was lost (a second-generator
+    // drift, signature p = 0.0033, gain 8.3 % at p = 0.11); on 350 fresh records (clean, drift;
+    // seeds 97000-97129) no cause changed. Not at several loads: there each segment's free
+    // offset takes up most of a drift, so its extension can gain little while the signature
+    // stands (the rig's voltage drift of 0.12 at seven loads in increasing order, seed 1049:
+    // signature p = 0.0012, the trend within the segments gaining 1.8 % at p = 0.061, from a
+    // held-out E_RMS of 0.109 % of range; test VoltageDriftInLoadOrderAndSpikesAnywhere).
+    const bool gain_holds = rec.several_loads || f.p_value < ctx.opt.gain_alpha;
     if ((sig.p_value < ctx.opt.alpha / 10.0 && f.gain_pct > 0.0) ||
-        (sig.p_value < ctx.opt.alpha && f.gain_pct > 1.0))
+        (sig.p_value < ctx.opt.alpha && f.gain_pct > 1.0 && gain_holds))
       f.detected = true;
   }
   return f;
