@@ -283,6 +283,9 @@
 #   the lag in readings of one memory state at z = 5.0 over 146 pairs held back by loops that
 #   differ by history (p = 7e-7) though neither loop model gains, named `drift` by a settling
 #   trend gaining 59.6 % against the Kelvin element's 44.1 %: `creep`.
+# - Session 77: two clean third-generator load records under AR(1) noise (seeds 60028 and
+#   60358) whose return-point time signature stood at p = 0.0012 and 0.007 on trends gaining
+#   1.1 and 2.1 % at p = 0.21, named `drift` while that tier asked for no gain test: `none`.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -328,6 +331,8 @@ make_cases c c 1 1500 voltage-none
 make_cases c c 1 3049 voltage-none
 make_cases c c 1 3048 voltage-none
 make_cases b b 1 1500 voltage-none
+make_cases c c 1 60028 load-none
+make_cases c c 1 60358 load-none
 make_cases c c 2 703 voltage-creep
 make_cases b b 1 2003 voltage-drift
 make_cases c c 1 1700 voltage-creep
@@ -552,5 +557,7 @@ expect "$work/d/load-outliers-50007.csv" outliers
 expect "$work/b/load-outliers-80050.csv" outliers
 expect "$work/e/load-outliers-50005.csv" outliers
 expect "$work/d/load-creep-50000.csv" creep
+expect "$work/c/load-none-60028.csv" none
+expect "$work/c/load-none-60358.csv" none
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]
