@@ -286,6 +286,10 @@
 # - Session 77: two clean third-generator load records under AR(1) noise (seeds 60028 and
 #   60358) whose return-point time signature stood at p = 0.0012 and 0.007 on trends gaining
 #   1.1 and 2.1 % at p = 0.21, named `drift` while that tier asked for no gain test: `none`.
+# - Session 78: three clean third-generator load records under AR(1) noise (seeds 60404,
+#   60411, 60481), `unexplained` while the noise floor's lag-one correlation was the smaller of
+#   its held-out and training estimates (0.00 / 0.76, 0.74 / 0.00, 0.00 / 0.54: the floor at
+#   0.6-0.9 of the true sigma); with the mean of the two, `none`.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -333,6 +337,9 @@ make_cases c c 1 3048 voltage-none
 make_cases b b 1 1500 voltage-none
 make_cases c c 1 60028 load-none
 make_cases c c 1 60358 load-none
+make_cases c c 1 60404 load-none
+make_cases c c 1 60411 load-none
+make_cases c c 1 60481 load-none
 make_cases c c 2 703 voltage-creep
 make_cases b b 1 2003 voltage-drift
 make_cases c c 1 1700 voltage-creep
@@ -559,5 +566,8 @@ expect "$work/e/load-outliers-50005.csv" outliers
 expect "$work/d/load-creep-50000.csv" creep
 expect "$work/c/load-none-60028.csv" none
 expect "$work/c/load-none-60358.csv" none
+expect "$work/c/load-none-60404.csv" none
+expect "$work/c/load-none-60411.csv" none
+expect "$work/c/load-none-60481.csv" none
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]
