@@ -226,9 +226,9 @@ Context::Context(const Record& record, const Baseline& b, const DiagnoseOptions&
   // noise), the training one where the fit took up the noise's slow part (0 on AR(1) noise of
   // rho 0.6). The smaller left the floor low under AR(1) noise (on 400 clean third-generator
   // records of known noise a median of 0.79 of the true sigma; white noise 1.08): three clean AR
-  // records of 1000 `unexplained`, `none` with the mean. The larger put the floor of white-noise
-  // records whose held-out residuals carry structure at up to 1.9 times the truth, and hid a
-  // knee the maps miss (docs/diagnose-log.md, sessions 77 and 78).
+  // records of 1000 `unexplained`, `none` with the mean. The larger put the floor of one
+  // white-noise record in ten at 1.9 times the truth or more, and hid a knee the maps miss
+  // (docs/diagnose-log.md, sessions 77 and 78).
   noise_sd = noise(0.5 * (spread_ratio_correlation(dr, heldout_differences(*this, 2)) +
                           training_noise_correlation(*this)));
   rms_before = 100.0 * rms(rs) / rec.range;
