@@ -221,13 +221,9 @@ Context::Context(const Record& record, const Baseline& b, const DiagnoseOptions&
     return std::sqrt(white * white / (1.0 - rho) + resolution * resolution / 12.0);
   };
   floor = noise(0.0);
-  // The mean of the two estimates. Either reads far from the truth on one record in several,
-  // the held-out one where the residuals carry structure (a knee the maps miss: 0.56 on white
-  // noise), the training one where the fit took up the noise's slow part (0 on AR(1) noise of
-  // rho 0.6). The smaller left the floor low under AR(1) noise (on 400 clean third-generator
-  // records of known noise a median of 0.79 of the true sigma; white noise 1.08): three clean AR
-  // records of 1000 `unexplained`, `none` with the mean. The larger put the floor of one
-  // white-noise record in ten at 1.9 times the truth or more, and hid a knee the maps miss
+  // The mean of the two estimates: either can miss by 0.5 or more on one record, the held-out
+  // one reading structure as correlation, the training one missing the noise's slow part. The
+  // smaller left the floor low under AR(1) noise, the larger hid a knee the maps miss
   // (docs/diagnose-log.md, sessions 77 and 78).
   noise_sd = noise(0.5 * (spread_ratio_correlation(dr, heldout_differences(*this, 2)) +
                           training_noise_correlation(*this)));
