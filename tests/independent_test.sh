@@ -290,11 +290,6 @@
 #   60411, 60481), `unexplained` while the noise floor's lag-one correlation was the smaller of
 #   its held-out and training estimates (0.00 / 0.76, 0.74 / 0.00, 0.00 / 0.54: the floor at
 #   0.6-0.9 of the true sigma); with the mean of the two, `none`.
-# - Session 79: clean load records named while the baseline's chosen grid was coarse (L = 8):
-#   third-generator 60084 (`creep`, a Kelvin element gaining 7.0 % at p = 0.009, AR(1) noise)
-#   and 60093 (`drift`, a trend fitted with the baseline gaining 11.2 %), and fourth-generator
-#   60130 (`minor_loop_noncongruence`). With the baseline four levels finer (L = 12) each
-#   diagnosis is `none`, and so is the record (none_with_finer_baseline in diagnose.cpp).
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -345,9 +340,6 @@ make_cases c c 1 60358 load-none
 make_cases c c 1 60404 load-none
 make_cases c c 1 60411 load-none
 make_cases c c 1 60481 load-none
-make_cases c c 1 60084 load-none
-make_cases c c 1 60093 load-none
-make_cases d d 1 60130 load-none
 make_cases c c 2 703 voltage-creep
 make_cases b b 1 2003 voltage-drift
 make_cases c c 1 1700 voltage-creep
@@ -577,8 +569,5 @@ expect "$work/c/load-none-60358.csv" none
 expect "$work/c/load-none-60404.csv" none
 expect "$work/c/load-none-60411.csv" none
 expect "$work/c/load-none-60481.csv" none
-expect "$work/c/load-none-60084.csv" none
-expect "$work/c/load-none-60093.csv" none
-expect "$work/d/load-none-60130.csv" none
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]

@@ -50,9 +50,6 @@ double sustained_rms_pct(const diagnosis::Context& ctx, const std::vector<std::s
   return 100.0 * diagnosis::trimmed_sigma(std::move(sq), 20, 1.0) / ctx.rec.range;
 }
 
-/// How much finer the baseline is when a named cause is read again (none_with_finer_baseline).
-constexpr int kFinerLevels = 4;
-
 /// The record with its folds, the baseline and the held-out context, which refer to each other.
 struct HeldOut {
   std::unique_ptr<const DiagnoseOptions> opt;
@@ -174,10 +171,11 @@ void recheck_outliers(diagnosis::Context& ctx, std::vector<Finding>& findings) {
       ext->effect, ext->gain_pct);
 }
 
-/// The diagnosis of one held-out record: the baseline's errors, every detector's finding and
-/// the cause they name.
-Diagnosis diagnose_held_out(const HeldOut& held) {
+}  // namespace
+
+Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   using namespace diagnosis;
+  const HeldOut held = hold_out(data, opt);
   const Record& rec = *held.rec;
   const Baseline& base = *held.base;
   Context& ctx = *held.ctx;
@@ -196,6 +194,7 @@ Diagnosis diagnose_held_out(const HeldOut& held) {
   const std::vector<std::size_t> identified_rows = diagnosis::identified_scored(ctx);
   d.identified_rows = identified_rows.size();
   d.identified_sustained_rms_pct_range = sustained_rms_pct(ctx, identified_rows);
+  d.protocol_limits = protocol_limits_of(data);
   d.baseline_prediction.assign(rec.size(), std::numeric_limits<double>::quiet_NaN());
   for (std::size_t t : ctx.scored) d.baseline_prediction[t] = ctx.oof[t];
   d.heldout_fold.resize(rec.size());
@@ -212,42 +211,6 @@ Diagnosis diagnose_held_out(const HeldOut& held) {
   recheck_outliers(ctx, d.findings);
 
   name_cause(ctx, d);
-  return d;
-}
-
-/// Load tests: a named cause (or `unexplained`) read again with the baseline four levels
-/// finer, the smoothness and folds as chosen. The baseline's L is chosen by cross-validation
-/// on the whole record, and under noise it can settle on a grid coarser than the response's
-/// loops: an extension then gains on held-out cycles by taking up the coarse grid's misfit,
-/// which follows the protocol and so the time (a trend) or the lag behind each reversal (a
-/// Kelvin element). A finer grid takes up that misfit itself; a drift or a creep it cannot
-/// follow. Where the finer baseline's diagnosis is `none`, the cause was the grid's, and the
-/// record is `none`. Returns that diagnosis's baseline name where it is `none`.
-std::optional<std::string> none_with_finer_baseline(const DiagnoseData& data, const HeldOut& held) {
-  DiagnoseOptions finer = *held.opt;  // the folds as held out
-  finer.baseline = held.base->options();
-  finer.baseline.levels += kFinerLevels;
-  HeldOut h;
-  try {
-    h = hold_out(data, finer);
-  } catch (const IdentificationError&) {
-    return std::nullopt;
-  }
-  const Diagnosis again = diagnose_held_out(h);
-  if (again.cause != "none") return std::nullopt;
-  return again.baseline_model;
-}
-
-}  // namespace
-
-Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
-  using namespace diagnosis;
-  const HeldOut held = hold_out(data, opt);
-  const Record& rec = *held.rec;
-  const Baseline& base = *held.base;
-  Context& ctx = *held.ctx;
-  Diagnosis d = diagnose_held_out(held);
-  d.protocol_limits = protocol_limits_of(data);
   // Where nothing was named on a test held out by load segment: the lonely stroke's second
   // look, held out within the segments (lonely_within_segments). And where creep is named by
   // the gain of a Kelvin element restarted at each load alone beside the lonely stroke's offset
@@ -280,22 +243,6 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
             "much as a Kelvin element restarted at each load, or nearly (the lonely stroke's "
             "second look)";
       }
-    }
-  }
-  if (rec.input_is_load && d.cause != "none") {
-    if (const std::optional<std::string> finer = none_with_finer_baseline(data, held)) {
-      for (Finding& f : d.findings) {
-        if (f.effect != d.cause || !f.detected) continue;
-        f.detected = false;
-        f.evidence += fmt::format(
-            "; not named: with the baseline {} levels finer ({}) the diagnosis is `none`",
-            kFinerLevels, *finer);
-      }
-      d.cause_note = fmt::format(
-          "{} with the baseline as chosen ({}), none with it {} levels finer ({}): what was "
-          "taken up is the chosen grid's misfit",
-          d.cause, d.baseline_model, kFinerLevels, *finer);
-      d.cause = "none";
     }
   }
   return d;
