@@ -290,6 +290,12 @@
 #   60411, 60481), `unexplained` while the noise floor's lag-one correlation was the smaller of
 #   its held-out and training estimates (0.00 / 0.76, 0.74 / 0.00, 0.00 / 0.54: the floor at
 #   0.6-0.9 of the true sigma); with the mean of the two, `none`.
+# - Session 80: voltage offset nonlinearities of the first generator (seed 99000, the knee's
+#   maps gaining 37.1 % against a drift sized inside the segments gaining 6.6 %) and of the
+#   fifth (seed 98005, 26.0 % against 7.5 %), `drift` while any such drift held the maps back:
+#   `offset_nonlinearity` since the maps must gain three times that drift's gain to be named
+#   past it. And drifts whose maps gained 1.19 times that drift's 36.4 % (fourth generator,
+#   seed 99012) and 2.01 times its 33.7 % (fifth, seed 99108), still held back: `drift`.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -340,6 +346,10 @@ make_cases c c 1 60358 load-none
 make_cases c c 1 60404 load-none
 make_cases c c 1 60411 load-none
 make_cases c c 1 60481 load-none
+make_cases a fresh 1 99000 voltage-offset_nonlinearity
+make_cases e e 1 98005 voltage-offset_nonlinearity
+make_cases d d 1 99012 voltage-drift
+make_cases e e 1 99108 voltage-drift
 make_cases c c 2 703 voltage-creep
 make_cases b b 1 2003 voltage-drift
 make_cases c c 1 1700 voltage-creep
@@ -569,5 +579,9 @@ expect "$work/c/load-none-60358.csv" none
 expect "$work/c/load-none-60404.csv" none
 expect "$work/c/load-none-60411.csv" none
 expect "$work/c/load-none-60481.csv" none
+expect "$work/fresh/voltage-offset_nonlinearity-99000.csv" offset_nonlinearity
+expect "$work/e/voltage-offset_nonlinearity-98005.csv" offset_nonlinearity
+expect "$work/d/voltage-drift-99012.csv" drift
+expect "$work/e/voltage-drift-99108.csv" drift
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]
