@@ -130,8 +130,12 @@ void BM_PreisachIdentification(benchmark::State& state) {
   const auto rows = static_cast<std::size_t>(state.range(1));
   const int shifts = static_cast<int>(state.range(2));
   const int threads = static_cast<int>(state.range(3));
+  // Readings per hold: each input level read this many times (a data logger sampling through
+  // the hold), the same number of rows in all.
+  const auto per_hold = static_cast<std::size_t>(state.range(4));
   const PreisachModel truth = random_model(L, 3);
-  const std::vector<double> u = test_like_input(rows, 4);
+  std::vector<double> u;
+  for (double level : test_like_input(rows / per_hold, 4)) u.insert(u.end(), per_hold, level);
   PreisachState s = PreisachState::negative_saturation(truth.grid());
   Eigen::VectorXd y = truth.simulate(s, u);
   std::mt19937 rng(5);
@@ -148,18 +152,19 @@ void BM_PreisachIdentification(benchmark::State& state) {
   opt.lo = 0.0;
   opt.hi = 1.0;
   for (auto _ : state) {
-    PreisachFit fit = fit_preisach(u, std::span<const double>(y.data(), rows), {}, opt);
+    PreisachFit fit = fit_preisach(u, std::span<const double>(y.data(), u.size()), {}, opt);
     benchmark::DoNotOptimize(fit.model.bias());
   }
 }
 BENCHMARK(BM_PreisachIdentification)
-    ->ArgNames({"L", "rows", "shifts", "threads"})
-    ->Args({10, 300, 1, 1})
-    ->Args({10, 300, 4, 1})
-    ->Args({20, 2000, 1, 1})
-    ->Args({40, 20000, 1, 1})
-    ->Args({40, 20000, 4, 1})
-    ->Args({40, 20000, 4, 2})
+    ->ArgNames({"L", "rows", "shifts", "threads", "per_hold"})
+    ->Args({10, 300, 1, 1, 1})
+    ->Args({10, 300, 4, 1, 1})
+    ->Args({20, 2000, 1, 1, 1})
+    ->Args({40, 20000, 1, 1, 1})
+    ->Args({40, 20000, 4, 1, 1})
+    ->Args({40, 20000, 4, 2, 1})
+    ->Args({40, 20000, 1, 1, 10})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -76,7 +76,13 @@ Design make_design(const PreisachGrid& grid, int sign, std::span<const double> i
   d.A.resize(n, m);
   Eigen::VectorXd row(p);
   for (Eigen::Index t = 0; t < n; ++t) {
-    if (restart && t > 0 && segment_of[t] != segment_of[t - 1]) state = initial();
+    const bool restarts = restart && t > 0 && segment_of[t] != segment_of[t - 1];
+    if (restarts) state = initial();
+    // The same input again leaves the memory as it was (a reading later in the same hold).
+    if (t > 0 && !restarts && input[t] == input[t - 1]) {
+      d.A.row(t).head(p) = d.A.row(t - 1).head(p);
+      continue;
+    }
     state.apply(input[t]);
     signed_area_fractions(grid, state, row);
     d.A.row(t).head(p) = row.transpose() * static_cast<double>(sign);
@@ -103,11 +109,28 @@ Design make_design(const PreisachGrid& grid, int sign, std::span<const double> i
     }
     d.rows[b] = static_cast<int>(idx.size());
     if (idx.empty()) continue;
-    Eigen::MatrixXd Ab(static_cast<Eigen::Index>(idx.size()), m);
-    Eigen::VectorXd yb(static_cast<Eigen::Index>(idx.size()));
+    // Consecutive rows with the same regressors (readings during one hold: the same memory
+    // state and input) enter once, weighted by their count: k equal rows a add k a a' to the
+    // Gram matrix and a (y_1 + ... + y_k) to the right-hand side. Exact, and the Gram product,
+    // the fit's largest cost, shrinks by the readings per hold.
+    std::vector<std::pair<Eigen::Index, Eigen::Index>> runs;  // [first, last] in idx
     for (std::size_t r = 0; r < idx.size(); ++r) {
-      Ab.row(static_cast<Eigen::Index>(r)) = d.A.row(idx[r]);
-      yb[static_cast<Eigen::Index>(r)] = y[idx[r]];
+      const auto i = static_cast<Eigen::Index>(r);
+      if (!runs.empty() && d.A.row(idx[r]) == d.A.row(idx[r - 1]))
+        runs.back().second = i;
+      else
+        runs.emplace_back(i, i);
+    }
+    Eigen::MatrixXd Ab(static_cast<Eigen::Index>(runs.size()), m);
+    Eigen::VectorXd yb(static_cast<Eigen::Index>(runs.size()));
+    for (std::size_t r = 0; r < runs.size(); ++r) {
+      const auto [first, last] = runs[r];
+      const double w = std::sqrt(static_cast<double>(last - first + 1));
+      double sum = 0.0;
+      for (Eigen::Index i = first; i <= last; ++i) sum += y[idx[static_cast<std::size_t>(i)]];
+      // sqrt(k) a in the Gram product gives k a a'; sum / sqrt(k) against it gives a sum.
+      Ab.row(static_cast<Eigen::Index>(r)) = w * d.A.row(idx[static_cast<std::size_t>(first)]);
+      yb[static_cast<Eigen::Index>(r)] = sum / w;
     }
     d.gram[b].selfadjointView<Eigen::Lower>().rankUpdate(Ab.transpose());
     d.gram[b] = d.gram[b].selfadjointView<Eigen::Lower>();
@@ -267,20 +290,27 @@ HeldoutErrors heldout_errors(const std::vector<Design>& shifts, const std::vecto
 // by more than one standard error of the paired differences: the one-standard-error rule. A
 // significance test has no power over the three to five blocks of a short record (at 5 % a
 // paired t-test refused the term on records half reversible whose held-out error it cut six-
-// fold; docs/diagnose-log.md, session 36).
+// fold; docs/diagnose-log.md, session 36). A gain within round-off of the errors is none: a
+// term whose coefficient sits at its bound in every fold leaves the errors equal but for the
+// last digits, and the rule read those (a fresh voltage record's baseline took the term or
+// not with the order of a sum; docs/diagnose-log.md, session 81).
 bool beats_by_one_se(const std::vector<double>& without, const std::vector<double>& with) {
   const std::size_t m = without.size();
   if (m < 2 || with.size() != m) return false;
   const auto md = static_cast<double>(m);
-  double mean = 0.0;
-  for (std::size_t b = 0; b < m; ++b) mean += without[b] - with[b];
+  double mean = 0.0, scale = 0.0;
+  for (std::size_t b = 0; b < m; ++b) {
+    mean += without[b] - with[b];
+    scale += without[b];
+  }
   mean /= md;
+  scale /= md;
   double var = 0.0;
   for (std::size_t b = 0; b < m; ++b) {
     const double d = without[b] - with[b] - mean;
     var += d * d;
   }
-  return mean > std::sqrt(var / (md - 1.0) / md);
+  return mean > 1e-9 * scale && mean > std::sqrt(var / (md - 1.0) / md);
 }
 
 }  // namespace
