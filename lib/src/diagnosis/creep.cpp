@@ -256,16 +256,18 @@ Finding prony_creep(Context& ctx, double hold) {
 }
 
 // The model seen through a Kelvin element in the readings' own time: p -> (1 - c) p + c v, v
-// relaxing towards p with time constant tau, restarted at each segment.
+// relaxing towards p with time constant tau, restarted at each segment. The decay between
+// readings is computed once: the filter runs on every column of a design.
 OutputFilter kelvin_filter(const Record& rec, Kelvin k) {
-  return [&rec, k](Eigen::Ref<Eigen::VectorXd> p) {
+  std::vector<double> decay(rec.size());  // 0 where the element restarts
+  for (std::size_t i = 1; i < rec.size(); ++i) {
+    if (rec.seg[i] == rec.seg[i - 1])
+      decay[i] = std::exp(-std::max(rec.time[i] - rec.time[i - 1], 0.0) / k.tau);
+  }
+  return [decay = std::move(decay), k](Eigen::Ref<Eigen::VectorXd> p) {
     double v = 0.0;
     for (Eigen::Index t = 0; t < p.size(); ++t) {
-      const auto i = static_cast<std::size_t>(t);
-      const bool start = i == 0 || rec.seg[i] != rec.seg[i - 1];
-      const double decay =
-          start ? 0.0 : std::exp(-std::max(rec.time[i] - rec.time[i - 1], 0.0) / k.tau);
-      v = start ? p[t] : p[t] + (v - p[t]) * decay;
+      v = p[t] + (v - p[t]) * decay[static_cast<std::size_t>(t)];
       p[t] = (1.0 - k.c) * p[t] + k.c * v;
     }
   };

@@ -18,12 +18,16 @@
 namespace scpkit {
 namespace {
 
+using RowMajorMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
 // The linear problem for one grid: per-block normal equations of [sign * S, 1] (and, with the
 // reversible term, sign * (u - lo) / (hi - lo)) and the smoothness penalty matrix. Unknowns:
-// cell masses (times sign), the bias, then r (times sign).
+// cell masses (times sign), the bias, then r (times sign). The regressors are stored by
+// reading, each row contiguous: rows are written, compared, combined into the Gram matrix and
+// multiplied one at a time.
 struct Design {
   PreisachGrid grid;
-  Eigen::MatrixXd A;                  // N x (cells + 1 + reversible)
+  RowMajorMatrix A;                   // N x (cells + 1 + reversible)
   std::vector<Eigen::MatrixXd> gram;  // per block, unscaled A_b' A_b
   std::vector<Eigen::VectorXd> rhs;   // per block, A_b' y_b
   std::vector<int> rows;              // per block, sample count
@@ -57,6 +61,74 @@ Eigen::MatrixXd smoothness_penalty(const PreisachGrid& grid, int unknowns) {
   return R;
 }
 
+// The most dimensions a run of rows is combined in (combine_run); a Kelvin element's readings
+// in one hold span two (the hold's regressors and the state they relax from).
+constexpr Eigen::Index kMaxRunRank = 4;
+
+// Writes rows whose Gram matrix and right-hand side are those of the rows `run` of A against y,
+// into the columns of AbT from `at` on (yb alike), and returns how many. Equal rows a, k of them,
+// give one: sqrt(k) a against (y_1 + ... + y_k) / sqrt(k). Rows R = C Q in a space of r < k
+// dimensions (Q: r orthonormal rows, by Gram-Schmidt) give r: their Gram matrix is Q' C'C Q and
+// right-hand side Q' C' y, so with C'C = L L' the rows L'Q against L^-1 C' y give both. Exact to
+// round-off: a row is taken as in the space when what Gram-Schmidt leaves of it is below 1e-12 of
+// its norm. Other runs are written as they are. The Gram product, the fit's largest cost, shrinks
+// by the readings per hold.
+Eigen::Index combine_run(const RowMajorMatrix& A, const Eigen::Ref<const Eigen::VectorXd>& y,
+                         const std::vector<Eigen::Index>& run, Eigen::MatrixXd& AbT,
+                         Eigen::VectorXd& yb, Eigen::Index at) {
+  const auto k = static_cast<Eigen::Index>(run.size());
+  auto as_they_are = [&] {
+    for (Eigen::Index i = 0; i < k; ++i) {
+      AbT.col(at + i) = A.row(run[static_cast<std::size_t>(i)]).transpose();
+      yb[at + i] = y[run[static_cast<std::size_t>(i)]];
+    }
+    return k;
+  };
+  if (k == 1) return as_they_are();
+  const auto equal = [&] {
+    for (Eigen::Index i = 1; i < k; ++i) {
+      if (A.row(run[static_cast<std::size_t>(i)]) != A.row(run[0])) return false;
+    }
+    return true;
+  };
+  if (equal()) {
+    const double w = std::sqrt(static_cast<double>(k));
+    double sum = 0.0;
+    for (Eigen::Index t : run) sum += y[t];
+    AbT.col(at) = w * A.row(run[0]).transpose();
+    yb[at] = sum / w;
+    return 1;
+  }
+  const Eigen::Index m = A.cols();
+  Eigen::MatrixXd Q(m, kMaxRunRank);  // orthonormal columns, the first r in use
+  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(k, kMaxRunRank);
+  Eigen::Index r = 0;
+  for (Eigen::Index i = 0; i < k; ++i) {
+    const auto x = A.row(run[static_cast<std::size_t>(i)]).transpose();
+    Eigen::VectorXd rest = x;
+    for (int pass = 0; pass < 2; ++pass) {  // twice is enough (Kahan-Parlett)
+      const Eigen::VectorXd c = Q.leftCols(r).transpose() * rest;
+      C.row(i).head(r) += c.transpose();
+      rest -= Q.leftCols(r) * c;
+    }
+    const double left = rest.norm();
+    if (left <= 1e-12 * x.norm()) continue;
+    if (r == kMaxRunRank) return as_they_are();
+    Q.col(r) = rest / left;
+    C(i, r) = left;
+    ++r;
+  }
+  if (r >= k) return as_they_are();
+  Eigen::VectorXd yr(k);
+  for (Eigen::Index i = 0; i < k; ++i) yr[i] = y[run[static_cast<std::size_t>(i)]];
+  const Eigen::MatrixXd CtC = C.leftCols(r).transpose() * C.leftCols(r);
+  const Eigen::LLT<Eigen::MatrixXd> llt(CtC);
+  const Eigen::MatrixXd Lr = llt.matrixL();
+  AbT.middleCols(at, r) = Q.leftCols(r) * Lr;
+  yb.segment(at, r) = Lr.triangularView<Eigen::Lower>().solve(C.leftCols(r).transpose() * yr);
+  return r;
+}
+
 Design make_design(const PreisachGrid& grid, int sign, std::span<const double> input,
                    std::span<const double> output, const std::vector<int>& block_of, int nblocks,
                    bool with_rank, bool restart, const std::vector<int>& segment_of,
@@ -75,12 +147,16 @@ Design make_design(const PreisachGrid& grid, int sign, std::span<const double> i
   const int m = p + 1 + (reversible ? 1 : 0);
   d.A.resize(n, m);
   Eigen::VectorXd row(p);
+  // in_hold[t]: reading t has the input and memory of reading t - 1 (a later reading in the
+  // same hold), so its regressors before any filter are those of t - 1.
+  std::vector<char> in_hold(static_cast<std::size_t>(n), 0);
   for (Eigen::Index t = 0; t < n; ++t) {
     const bool restarts = restart && t > 0 && segment_of[t] != segment_of[t - 1];
     if (restarts) state = initial();
     // The same input again leaves the memory as it was (a reading later in the same hold).
     if (t > 0 && !restarts && input[t] == input[t - 1]) {
       d.A.row(t).head(p) = d.A.row(t - 1).head(p);
+      in_hold[static_cast<std::size_t>(t)] = 1;
       continue;
     }
     state.apply(input[t]);
@@ -93,11 +169,25 @@ Design make_design(const PreisachGrid& grid, int sign, std::span<const double> i
     for (Eigen::Index t = 0; t < n; ++t) d.A(t, p + 1) = sign * (input[t] - lo) / (hi - lo);
   }
   if (filter) {
-    for (Eigen::Index k = 0; k < m; ++k) filter(d.A.col(k));
+    // The filter takes one column at a time, contiguous: eight columns are copied out together
+    // (each row's eight values one cache line), filtered and copied back.
+    constexpr Eigen::Index kAtOnce = 8;
+    Eigen::MatrixXd cols(n, kAtOnce);
+    for (Eigen::Index k0 = 0; k0 < m; k0 += kAtOnce) {
+      const Eigen::Index w = std::min(kAtOnce, m - k0);
+      for (Eigen::Index t = 0; t < n; ++t) cols.row(t).head(w) = d.A.row(t).segment(k0, w);
+      for (Eigen::Index k = 0; k < w; ++k) filter(cols.col(k));
+      for (Eigen::Index t = 0; t < n; ++t) d.A.row(t).segment(k0, w) = cols.row(t).head(w);
+    }
   }
-  for (int k = 0; k < p; ++k) {
-    if (d.A.col(k).maxCoeff() - d.A.col(k).minCoeff() < 1e-9) ++d.unexcited;
+  // Cells whose column does not change (never switched), by one pass over the rows.
+  Eigen::VectorXd lowest = Eigen::VectorXd::Constant(p, std::numeric_limits<double>::infinity());
+  Eigen::VectorXd highest = -lowest;
+  for (Eigen::Index t = 0; t < n; ++t) {
+    lowest = lowest.cwiseMin(d.A.row(t).head(p).transpose());
+    highest = highest.cwiseMax(d.A.row(t).head(p).transpose());
   }
+  d.unexcited = static_cast<int>((!((highest - lowest).array() >= 1e-9)).count());
   const Eigen::Map<const Eigen::VectorXd> y(output.data(), n);
   d.gram.assign(nblocks, Eigen::MatrixXd::Zero(m, m));
   d.rhs.assign(nblocks, Eigen::VectorXd::Zero(m));
@@ -109,32 +199,30 @@ Design make_design(const PreisachGrid& grid, int sign, std::span<const double> i
     }
     d.rows[b] = static_cast<int>(idx.size());
     if (idx.empty()) continue;
-    // Consecutive rows with the same regressors (readings during one hold: the same memory
-    // state and input) enter once, weighted by their count: k equal rows a add k a a' to the
-    // Gram matrix and a (y_1 + ... + y_k) to the right-hand side. Exact, and the Gram product,
-    // the fit's largest cost, shrinks by the readings per hold.
-    std::vector<std::pair<Eigen::Index, Eigen::Index>> runs;  // [first, last] in idx
+    // Runs of consecutive rows that enter the Gram matrix together: rows equal to the one
+    // before, and the readings of one hold (equal before a time filter, which moves them in a
+    // space of few dimensions).
+    std::vector<std::pair<std::size_t, std::size_t>> runs;  // [first, last] in idx
     for (std::size_t r = 0; r < idx.size(); ++r) {
-      const auto i = static_cast<Eigen::Index>(r);
-      if (!runs.empty() && d.A.row(idx[r]) == d.A.row(idx[r - 1]))
-        runs.back().second = i;
+      const bool joins =
+          r > 0 && (d.A.row(idx[r]) == d.A.row(idx[r - 1]) ||
+                    (idx[r] == idx[r - 1] + 1 && in_hold[static_cast<std::size_t>(idx[r])]));
+      if (joins)
+        runs.back().second = r;
       else
-        runs.emplace_back(i, i);
+        runs.emplace_back(r, r);
     }
-    Eigen::MatrixXd Ab(static_cast<Eigen::Index>(runs.size()), m);
-    Eigen::VectorXd yb(static_cast<Eigen::Index>(runs.size()));
-    for (std::size_t r = 0; r < runs.size(); ++r) {
-      const auto [first, last] = runs[r];
-      const double w = std::sqrt(static_cast<double>(last - first + 1));
-      double sum = 0.0;
-      for (Eigen::Index i = first; i <= last; ++i) sum += y[idx[static_cast<std::size_t>(i)]];
-      // sqrt(k) a in the Gram product gives k a a'; sum / sqrt(k) against it gives a sum.
-      Ab.row(static_cast<Eigen::Index>(r)) = w * d.A.row(idx[static_cast<std::size_t>(first)]);
-      yb[static_cast<Eigen::Index>(r)] = sum / w;
+    Eigen::MatrixXd AbT(m, static_cast<Eigen::Index>(idx.size()));
+    Eigen::VectorXd yb(static_cast<Eigen::Index>(idx.size()));
+    Eigen::Index used = 0;
+    for (const auto& [first, last] : runs) {
+      std::vector<Eigen::Index> run(idx.begin() + static_cast<std::ptrdiff_t>(first),
+                                    idx.begin() + static_cast<std::ptrdiff_t>(last) + 1);
+      used += combine_run(d.A, y, run, AbT, yb, used);
     }
-    d.gram[b].selfadjointView<Eigen::Lower>().rankUpdate(Ab.transpose());
+    d.gram[b].selfadjointView<Eigen::Lower>().rankUpdate(AbT.leftCols(used));
     d.gram[b] = d.gram[b].selfadjointView<Eigen::Lower>();
-    d.rhs[b] = Ab.transpose() * yb;
+    d.rhs[b] = AbT.leftCols(used) * yb.head(used);
   }
   d.penalty = smoothness_penalty(grid, m);
   if (!with_rank) return d;
@@ -293,7 +381,11 @@ HeldoutErrors heldout_errors(const std::vector<Design>& shifts, const std::vecto
 // fold; docs/diagnose-log.md, session 36). A gain within round-off of the errors is none: a
 // term whose coefficient sits at its bound in every fold leaves the errors equal but for the
 // last digits, and the rule read those (a fresh voltage record's baseline took the term or
-// not with the order of a sum; docs/diagnose-log.md, session 81).
+// not with the order of a sum; docs/diagnose-log.md, session 81). Nor is a gain that beats its
+// standard error only by round-off: where one block gains d and the others are equal, the mean
+// is d / m and so is the standard error, for any d and m, and the last digits of the blocks
+// that did not change decided (session 82: a test record took the term or not with the order
+// of the Gram product's sums). Ties go to the model without the term.
 bool beats_by_one_se(const std::vector<double>& without, const std::vector<double>& with) {
   const std::size_t m = without.size();
   if (m < 2 || with.size() != m) return false;
@@ -310,7 +402,8 @@ bool beats_by_one_se(const std::vector<double>& without, const std::vector<doubl
     const double d = without[b] - with[b] - mean;
     var += d * d;
   }
-  return mean > 1e-9 * scale && mean > std::sqrt(var / (md - 1.0) / md);
+  const double round_off = 1e-9 * scale;
+  return mean > round_off && mean - std::sqrt(var / (md - 1.0) / md) > round_off;
 }
 
 }  // namespace
