@@ -109,7 +109,8 @@ TEST(PreisachFit, ReadingsDuringAHoldWeighAsManyRows) {
 
 // Through a time filter the readings of one hold differ: a Kelvin element moves them within the
 // two dimensions of the hold's regressors and the state they relax from, and the fit enters
-// each hold as that many rows (combine_run in preisach_fit.cpp). A filter whose hold rows span
+// each hold as that many rows (combine_run in preisach_fit.cpp), also where one of the two is
+// nearly empty (a Kelvin element of a twenty-second of a reading). A filter whose hold rows span
 // more dimensions (a ten-tap moving sum) is entered row by row. Against ordinary least squares
 // on every reading's own filtered row, holds read 1 to 6 times.
 TEST(PreisachFit, FilteredReadingsDuringAHoldGiveTheLeastSquaresFit) {
@@ -120,6 +121,15 @@ TEST(PreisachFit, FilteredReadingsDuringAHoldGiveTheLeastSquaresFit) {
     double v = p[0];
     for (Eigen::Index t = 0; t < p.size(); ++t) {
       v = p[t] + (v - p[t]) * std::exp(-1.0 / 3.0);
+      p[t] = 0.6 * p[t] + 0.4 * v;
+    }
+  };
+  // A Kelvin element so fast that a hold's second reading leaves the first's direction by about
+  // 1e-10 of its norm: the space is two dimensions, one of them nearly empty.
+  const Filter fast_kelvin = [](Eigen::Ref<Eigen::VectorXd> p) {
+    double v = p[0];
+    for (Eigen::Index t = 0; t < p.size(); ++t) {
+      v = p[t] + (v - p[t]) * std::exp(-22.0);
       p[t] = 0.6 * p[t] + 0.4 * v;
     }
   };
@@ -135,7 +145,7 @@ TEST(PreisachFit, FilteredReadingsDuringAHoldGiveTheLeastSquaresFit) {
         p[t] += taps[static_cast<std::size_t>(j)] * x[t - j];
     }
   };
-  for (const Filter& filter : {kelvin, moving_sum}) {
+  for (const Filter& filter : {kelvin, fast_kelvin, moving_sum}) {
     for (int trial = 0; trial < 10; ++trial) {
       const PreisachGrid grid{0.0, 1.0, 4};
       Eigen::VectorXd w(grid.cells());

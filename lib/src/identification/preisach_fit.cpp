@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <Eigen/Cholesky>
+#include <Eigen/QR>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -69,7 +70,7 @@ constexpr Eigen::Index kMaxRunRank = 4;
 // into the columns of AbT from `at` on (yb alike), and returns how many. Equal rows a, k of them,
 // give one: sqrt(k) a against (y_1 + ... + y_k) / sqrt(k). Rows R = C Q in a space of r < k
 // dimensions (Q: r orthonormal rows, by Gram-Schmidt) give r: their Gram matrix is Q' C'C Q and
-// right-hand side Q' C' y, so with C'C = L L' the rows L'Q against L^-1 C' y give both. Exact to
+// right-hand side Q' C' y, so with C = U T the rows T Q against U'y give both. Exact to
 // round-off: a row is taken as in the space when what Gram-Schmidt leaves of it is below 1e-12 of
 // its norm. Other runs are written as they are. The Gram product, the fit's largest cost, shrinks
 // by the readings per hold.
@@ -121,11 +122,13 @@ Eigen::Index combine_run(const RowMajorMatrix& A, const Eigen::Ref<const Eigen::
   if (r >= k) return as_they_are();
   Eigen::VectorXd yr(k);
   for (Eigen::Index i = 0; i < k; ++i) yr[i] = y[run[static_cast<std::size_t>(i)]];
-  const Eigen::MatrixXd CtC = C.leftCols(r).transpose() * C.leftCols(r);
-  const Eigen::LLT<Eigen::MatrixXd> llt(CtC);
-  const Eigen::MatrixXd Lr = llt.matrixL();
-  AbT.middleCols(at, r) = Q.leftCols(r) * Lr;
-  yb.segment(at, r) = Lr.triangularView<Eigen::Lower>().solve(C.leftCols(r).transpose() * yr);
+  // C = U T (Householder; T r x r upper triangular): C'C = T'T and C'y = T' (U'y), so the
+  // rows are T Q against the first r entries of U'y. No C'C is formed: its condition is C's
+  // squared, and a reading that only just leaves the space would make it singular.
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(C.leftCols(r));
+  const Eigen::MatrixXd T = qr.matrixQR().topRows(r).triangularView<Eigen::Upper>();
+  AbT.middleCols(at, r) = Q.leftCols(r) * T.transpose();
+  yb.segment(at, r) = (qr.householderQ().transpose() * yr).head(r);
   return r;
 }
 
