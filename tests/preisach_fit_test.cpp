@@ -117,22 +117,20 @@ TEST(PreisachFit, FilteredReadingsDuringAHoldGiveTheLeastSquaresFit) {
   std::mt19937 rng(48);
   std::uniform_int_distribution<int> reads(1, 6);
   using Filter = std::function<void(Eigen::Ref<Eigen::VectorXd>)>;
-  const Filter kelvin = [](Eigen::Ref<Eigen::VectorXd> p) {
-    double v = p[0];
-    for (Eigen::Index t = 0; t < p.size(); ++t) {
-      v = p[t] + (v - p[t]) * std::exp(-1.0 / 3.0);
-      p[t] = 0.6 * p[t] + 0.4 * v;
-    }
+  // y = 0.6 p + 0.4 v, v relaxing towards p by `decay` per reading.
+  auto kelvin_element = [](double decay) -> Filter {
+    return [decay](Eigen::Ref<Eigen::VectorXd> p) {
+      double v = p[0];
+      for (Eigen::Index t = 0; t < p.size(); ++t) {
+        v = p[t] + (v - p[t]) * decay;
+        p[t] = 0.6 * p[t] + 0.4 * v;
+      }
+    };
   };
+  const Filter kelvin = kelvin_element(std::exp(-1.0 / 3.0));
   // A Kelvin element so fast that a hold's second reading leaves the first's direction by about
   // 1e-10 of its norm: the space is two dimensions, one of them nearly empty.
-  const Filter fast_kelvin = [](Eigen::Ref<Eigen::VectorXd> p) {
-    double v = p[0];
-    for (Eigen::Index t = 0; t < p.size(); ++t) {
-      v = p[t] + (v - p[t]) * std::exp(-22.0);
-      p[t] = 0.6 * p[t] + 0.4 * v;
-    }
-  };
+  const Filter fast_kelvin = kelvin_element(std::exp(-22.0));
   std::uniform_real_distribution<double> tap(0.05, 0.3);
   std::vector<double> taps(10);
   for (double& h : taps) h = tap(rng);
