@@ -27,7 +27,7 @@ void BM_SweepDesigns(benchmark::State& state) {
   const SweepContext& ctx = context();
   const int threads = static_cast<int>(state.range(0));
   std::size_t designs = 0;
-  for (auto _ : state) {
+  for ([[maybe_unused]] auto _ : state) {
     const auto rows = run_sweep(ctx, 0, 1, threads);
     designs += rows.size();
     benchmark::DoNotOptimize(rows.data());
@@ -42,7 +42,7 @@ void BM_EvaluateDesign(benchmark::State& state) {
   const SweepContext& ctx = context();
   DesignWorkspace ws;
   std::size_t i = 0;
-  for (auto _ : state) {
+  for ([[maybe_unused]] auto _ : state) {
     const DesignSpec d = sweep_candidate(ctx, i++ % 200000);
     benchmark::DoNotOptimize(evaluate_design(ctx.characterisation, ctx.material, d, ws).stroke_mm);
   }

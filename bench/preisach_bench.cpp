@@ -43,6 +43,16 @@ std::vector<double> test_like_input(std::size_t n, unsigned seed) {
   return u;
 }
 
+// The model's response to u from negative saturation: the targets a compensator is asked to
+// reach.
+std::vector<double> preisach_targets(const PreisachModel& model, const std::vector<double>& u) {
+  PreisachState plant = PreisachState::negative_saturation(model.grid());
+  std::vector<double> targets;
+  targets.reserve(u.size());
+  for (double v : u) targets.push_back(model.step(plant, v));
+  return targets;
+}
+
 void BM_PreisachForwardStep(benchmark::State& state) {
   const int L = static_cast<int>(state.range(0));
   const PreisachModel model = random_model(L, 1);
@@ -50,7 +60,7 @@ void BM_PreisachForwardStep(benchmark::State& state) {
   PreisachState s = PreisachState::negative_saturation(model.grid());
   std::size_t i = 0;
   double sink = 0.0;
-  for (auto _ : state) {
+  for ([[maybe_unused]] auto _ : state) {
     sink += model.step(s, u[i]);
     i = (i + 1) & (u.size() - 1);
   }
@@ -66,13 +76,11 @@ void BM_PreisachInverseStep(benchmark::State& state) {
   const int L = static_cast<int>(state.range(0));
   const PreisachModel model = random_model(L, 6);
   const std::vector<double> u = test_like_input(1 << 12, 7);
-  PreisachState plant = PreisachState::negative_saturation(model.grid());
-  std::vector<double> targets;
-  for (double v : u) targets.push_back(model.step(plant, v));
+  const std::vector<double> targets = preisach_targets(model, u);
   PreisachInverter inverter(model);
   PreisachState memory = PreisachState::negative_saturation(model.grid());
   std::size_t i = 0;
-  for (auto _ : state) {
+  for ([[maybe_unused]] auto _ : state) {
     benchmark::DoNotOptimize(inverter.step(memory, targets[i]).input);
     i = (i + 1) & (targets.size() - 1);
   }
@@ -96,10 +104,11 @@ void BM_GpiInverseStep(benchmark::State& state) {
   for (double& x : v) x *= 5.1;
   GpiState plant = GpiState::at_lower_turning_point(m, 0.0), memory = plant;
   std::vector<double> targets;
+  targets.reserve(v.size());
   for (double x : v) targets.push_back(gpi_step(m, plant, x));
   GpiInverter inverter(m);
   std::size_t i = 0;
-  for (auto _ : state) {
+  for ([[maybe_unused]] auto _ : state) {
     benchmark::DoNotOptimize(inverter.step(memory, targets[i]).input);
     i = (i + 1) & (targets.size() - 1);
   }
@@ -111,12 +120,10 @@ BENCHMARK(BM_GpiInverseStep);
 void BM_IterativeInverseStep(benchmark::State& state) {
   const PreisachModel model = random_model(20, 6);
   const std::vector<double> u = test_like_input(1 << 12, 7);
-  PreisachState plant = PreisachState::negative_saturation(model.grid());
-  std::vector<double> targets;
-  for (double v : u) targets.push_back(model.step(plant, v));
+  const std::vector<double> targets = preisach_targets(model, u);
   PreisachState memory = PreisachState::negative_saturation(model.grid());
   std::size_t i = 0;
-  for (auto _ : state) {
+  for ([[maybe_unused]] auto _ : state) {
     benchmark::DoNotOptimize(
         iterative_inverse_step(model, memory, targets[i], 0.0, 1.0, 0.05, 1e-9).step.input);
     i = (i + 1) & (targets.size() - 1);
@@ -164,7 +171,7 @@ void BM_PreisachIdentification(benchmark::State& state) {
       }
     };
   }
-  for (auto _ : state) {
+  for ([[maybe_unused]] auto _ : state) {
     PreisachFit fit = fit_preisach(u, std::span<const double>(y.data(), u.size()), {}, opt);
     benchmark::DoNotOptimize(fit.model.bias());
   }
