@@ -151,18 +151,21 @@ Design make_design(const PreisachGrid& grid, int sign, std::span<const double> i
   d.A.resize(n, m);
   Eigen::VectorXd row(p);
   // in_hold[t]: reading t has the input and memory of reading t - 1 (a later reading in the
-  // same hold), so its regressors before any filter are those of t - 1.
+  // same hold), so its regressors before any filter are those of source[t], its hold's first.
   std::vector<char> in_hold(static_cast<std::size_t>(n), 0);
+  std::vector<Eigen::Index> source(static_cast<std::size_t>(n));
   for (Eigen::Index t = 0; t < n; ++t) {
-    const bool restarts = restart && t > 0 && segment_of[t] != segment_of[t - 1];
+    const auto i = static_cast<std::size_t>(t);
+    const bool restarts = restart && t > 0 && segment_of[i] != segment_of[i - 1];
     if (restarts) state = initial();
     // The same input again leaves the memory as it was (a reading later in the same hold).
-    if (t > 0 && !restarts && input[t] == input[t - 1]) {
-      d.A.row(t).head(p) = d.A.row(t - 1).head(p);
-      in_hold[static_cast<std::size_t>(t)] = 1;
+    if (t > 0 && !restarts && input[i] == input[i - 1]) {
+      in_hold[i] = 1;
+      source[i] = source[i - 1];
       continue;
     }
-    state.apply(input[t]);
+    source[i] = t;
+    state.apply(input[i]);
     signed_area_fractions(grid, state, row);
     d.A.row(t).head(p) = row.transpose() * static_cast<double>(sign);
   }
@@ -173,14 +176,21 @@ Design make_design(const PreisachGrid& grid, int sign, std::span<const double> i
   }
   if (filter) {
     // The filter takes one column at a time, contiguous: eight columns are copied out together
-    // (each row's eight values one cache line), filtered and copied back.
+    // (each row's eight values one cache line; a reading later in a hold from its hold's first),
+    // filtered and copied back into every row.
     constexpr Eigen::Index kAtOnce = 8;
     Eigen::MatrixXd cols(n, kAtOnce);
     for (Eigen::Index k0 = 0; k0 < m; k0 += kAtOnce) {
       const Eigen::Index w = std::min(kAtOnce, m - k0);
-      for (Eigen::Index t = 0; t < n; ++t) cols.row(t).head(w) = d.A.row(t).segment(k0, w);
+      for (Eigen::Index t = 0; t < n; ++t)
+        cols.row(t).head(w) = d.A.row(source[static_cast<std::size_t>(t)]).segment(k0, w);
       for (Eigen::Index k = 0; k < w; ++k) filter(cols.col(k));
       for (Eigen::Index t = 0; t < n; ++t) d.A.row(t).segment(k0, w) = cols.row(t).head(w);
+    }
+  } else {
+    for (Eigen::Index t = 0; t < n; ++t) {
+      if (in_hold[static_cast<std::size_t>(t)])
+        d.A.row(t).head(p) = d.A.row(source[static_cast<std::size_t>(t)]).head(p);
     }
   }
   // Cells whose column does not change (never switched), by one pass over the rows.
