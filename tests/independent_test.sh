@@ -296,6 +296,11 @@
 #   `offset_nonlinearity` since the maps must gain three times that drift's gain to be named
 #   past it. And drifts whose maps gained 1.19 times that drift's 36.4 % (fourth generator,
 #   seed 99012) and 2.01 times its 33.7 % (fifth, seed 99108), still held back: `drift`.
+# - Session 83: creep named by its gain at alpha from 2 % (min_creep_gain_pct; 5 % before):
+#   a third-generator voltage creep (seed 98001, the lag carried across load changes gaining
+#   2.3 % at p = 0.001) and a second-generator load creep (seed 98003, a Kelvin element gaining
+#   4.5 % at p = 0.009), both `none` before: `creep`. And a clean third-generator load record
+#   (seed 99510) whose element gains 4.8 % at p = 0.051: `none`.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -350,6 +355,9 @@ make_cases a fresh 1 99000 voltage-offset_nonlinearity
 make_cases e e 1 98005 voltage-offset_nonlinearity
 make_cases d d 1 99012 voltage-drift
 make_cases e e 1 99108 voltage-drift
+make_cases c c 1 98001 voltage-creep
+make_cases b b 1 98003 load-creep
+make_cases c c 1 99510 load-none
 make_cases c c 2 703 voltage-creep
 make_cases b b 1 2003 voltage-drift
 make_cases c c 1 1700 voltage-creep
@@ -583,5 +591,8 @@ expect "$work/fresh/voltage-offset_nonlinearity-99000.csv" offset_nonlinearity
 expect "$work/e/voltage-offset_nonlinearity-98005.csv" offset_nonlinearity
 expect "$work/d/voltage-drift-99012.csv" drift
 expect "$work/e/voltage-drift-99108.csv" drift
+expect "$work/c/voltage-creep-98001.csv" creep
+expect "$work/b/load-creep-98003.csv" creep
+expect "$work/c/load-none-99510.csv" none
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]

@@ -37,7 +37,7 @@ void record(Finding& f, const Context& ctx, const Score& s, double p_value) {
   f.heldout_rms_before = ctx.rms_before;
   f.heldout_rms_after = s.rms_after;
   f.gain_pct = s.gain_pct;
-  f.detected = f.p_value < ctx.opt.alpha && f.gain_pct >= ctx.opt.min_gain_pct;
+  f.detected = f.p_value < ctx.opt.alpha && f.gain_pct >= least_gain_pct(ctx.opt, f.effect);
 }
 
 // Whether an extension's `heldout_prediction` takes row t from fold k's fit: held out in k,

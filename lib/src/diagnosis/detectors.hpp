@@ -155,6 +155,15 @@ double training_sse(const std::vector<double>& y, const std::vector<double>& p,
 /// A model-free signature's verdict in words.
 std::string describe(const Signature& s);
 
+/// The least held-out gain that names `effect`'s extension by its gain: min_gain_pct, and for
+/// creep min_creep_gain_pct. Where the holds differ in length or readings are taken during
+/// them, a Kelvin element's lag behind the input in time is rate dependence, which no
+/// rate-independent baseline can take up (hold_out sets min_gain_pct for it elsewhere;
+/// docs/diagnose-log.md, session 83).
+inline double least_gain_pct(const DiagnoseOptions& opt, const std::string& effect) {
+  return effect == "creep" ? opt.min_creep_gain_pct : opt.min_gain_pct;
+}
+
 // One function per named effect, each in its own file (drift.cpp, creep.cpp, lonely_stroke.cpp,
 // load_maps.cpp, noncongruence.cpp, outliers.cpp with its ramp scores in ramp_scores.cpp).
 

@@ -17,7 +17,8 @@
 //    (1.4826 MAD / sqrt 2) and the sensor's quantisation step q (q^2 / 12).
 // 3. One detector per named effect: the extension the effect implies (PHYSICS.md section 5),
 //    fitted without each block and scored on it exactly as the baseline; detected when it
-//    gains >= min_gain_pct of held-out E_RMS and the gain is significant against random sign
+//    gains >= min_gain_pct of held-out E_RMS (creep: min_creep_gain_pct) and the gain is
+//    significant against random sign
 //    flips of per-block gains; effects defined by a residual signature must also pass a
 //    block-permutation test of that signature (blocks of residuals keep their autocorrelation)
 //    at alpha, and then its gain need only be significant at gain_alpha (an intersection-union
@@ -114,6 +115,10 @@ struct DiagnoseOptions {
   double alpha = 0.01;        ///< significance level of each detector
   double gain_alpha = 0.05;   ///< the gain's test, after a significant residual signature
   double min_gain_pct = 5.0;  ///< an extension must gain at least this on held-out data
+  /// ... creep's extensions (a lag behind the input in time, which no rate-independent
+  /// baseline can take up) at least this, where the protocol shows creep: holds of different
+  /// lengths or readings during holds (else min_gain_pct; docs/diagnose.md, item 3).
+  double min_creep_gain_pct = 2.0;
   std::uint64_t seed = 1;
   /// How the baseline is identified: L, smoothness and the reversible term chosen by
   /// cross-validation unless set (`baseline.reversible = kOff`: the operator alone).
