@@ -68,22 +68,24 @@ struct HeldOut {
 HeldOut hold_out(const DiagnoseData& data, const DiagnoseOptions& options,
                  diagnosis::FoldScheme scheme = diagnosis::FoldScheme::load_segments) {
   int last_folds = 0;
-  // Where the protocol hides creep (one reading per hold, every hold as long: a lag in time is
-  // then a lag in reading index, a memory of the input path, and a rate-independent baseline's
-  // misfit takes part of it up), creep's extensions need min_gain_pct like the others
-  // (measured, session 83: a clean rig voltage record of equal holds under AR(1) noise, rho
-  // 0.6, a Kelvin element gaining 2.2 % at p = 0.004).
-  const std::vector<ProtocolLimit> limits = protocol_limits_of(data);
-  const bool creep_hidden = std::any_of(limits.begin(), limits.end(),
-                                        [](const ProtocolLimit& l) { return l.effect == "creep"; });
   for (int folds = options.folds;; folds *= 2) {
     HeldOut h;
     auto opt = std::make_unique<DiagnoseOptions>(options);
     opt->folds = folds;
-    if (creep_hidden)
+    // make_record checks the data first (lengths, excitation).
+    auto rec =
+        std::make_unique<const diagnosis::Record>(diagnosis::make_record(data, *opt, scheme));
+    // Where the protocol hides creep (one reading per hold, every hold as long: a lag in time is
+    // then a lag in reading index, a memory of the input path, and a rate-independent
+    // baseline's misfit takes part of it up), creep's extensions need min_gain_pct like the
+    // others (measured, session 83: a clean rig voltage record of equal holds under AR(1)
+    // noise, rho 0.6, a Kelvin element gaining 2.2 % at p = 0.004).
+    const std::vector<ProtocolLimit> limits = protocol_limits_of(data);
+    if (std::any_of(limits.begin(), limits.end(),
+                    [](const ProtocolLimit& l) { return l.effect == "creep"; }))
       opt->min_creep_gain_pct = std::max(opt->min_creep_gain_pct, opt->min_gain_pct);
     h.opt = std::move(opt);
-    h.rec = std::make_unique<const diagnosis::Record>(diagnosis::make_record(data, *h.opt, scheme));
+    h.rec = std::move(rec);
     h.base = std::make_unique<const diagnosis::Baseline>(*h.rec, h.opt->baseline);
     try {
       h.ctx = std::make_unique<diagnosis::Context>(*h.rec, *h.base, *h.opt);
