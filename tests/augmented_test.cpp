@@ -125,6 +125,7 @@ TEST(Augmented, TracksSinusoidalTargetsOpenLoopAtSeveralLoads) {
       starts[0] = 1;
       const auto steps = fit.model.invert(load, target, starts);
       std::vector<double> u;
+      u.reserve(steps.size());
       for (const auto& s : steps) u.push_back(s.input);
       AugmentedModel plant;  // the truth
       plant.f1 = truth.f1;

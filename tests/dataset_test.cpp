@@ -65,6 +65,7 @@ TEST(Datasets, SmaReversalCurvesHeldOutBeatTheSeedsRecipe) {
   const HysteresisOperator op(fit.model, fit.input_min, fit.input_max);
   const std::vector<InverseStep> inv = op.invert(test.y);
   std::vector<double> u;
+  u.reserve(inv.size());
   for (const auto& s : inv) u.push_back(s.input);
   const std::vector<double> again = op.simulate(u);
   int reached = 0;

@@ -150,6 +150,7 @@ Record monotone_branches(std::mt19937& rng, double noise, int fewest, int most,
   }
   PreisachState state = PreisachState::negative_saturation(grid);
   std::vector<double> clean;
+  clean.reserve(u.size());
   for (double v : u) clean.push_back(model.step(state, v) + linear * v);
   const auto [lo, hi] = std::minmax_element(clean.begin(), clean.end());
   std::normal_distribution<double> N(0.0, noise * (*hi - *lo));
@@ -308,6 +309,7 @@ Record loops_through(std::mt19937& rng, const std::vector<double>& u, double noi
   std::normal_distribution<double> N(0.0, 1.0);
   DiagnoseData data;
   std::vector<double> clean;
+  clean.reserve(u.size());
   for (double v : u) clean.push_back(model.step(state, v) + 5.0 * v);
   const auto [lo, hi] = std::minmax_element(clean.begin(), clean.end());
   const double low = *lo, range = *hi - *lo;
@@ -594,6 +596,7 @@ Record excursions(std::mt19937& rng, double noise, double rho, double c, std::ve
   }
   PreisachState state = PreisachState::negative_saturation(grid);
   std::vector<double> gamma;
+  gamma.reserve(u.size());
   for (double v : u) gamma.push_back(model.step(state, v) + 2.0 * v);
   const auto kelvin = [](const std::vector<double>& p, double fraction) {
     std::vector<double> out(p.size());
@@ -669,6 +672,7 @@ TEST(FoldSchemes, CyclesWithinSegmentsScoreEveryFirstRise) {
   for (int trial = 0; trial < 40; ++trial) {
     const int loads = 3 + trial % 5, cycles = 3 + trial % 3;
     std::vector<double> F;
+    F.reserve(static_cast<std::size_t>(loads));
     for (int s = 0; s < loads; ++s) F.push_back(0.2 + 0.1 * s);
     std::shuffle(F.begin(), F.end(), rng);
     DiagnoseData data;

@@ -1152,6 +1152,7 @@ TEST(Diagnose, PerReadingPredictionsGiveTheReportedErrors) {
     ASSERT_EQ(d.heldout_fold.size(), n) << s.describe();
     ASSERT_EQ(d.identified.size(), n) << s.describe();
     const auto [lo, hi] = std::minmax_element(data.output.begin(), data.output.end());
+    const double range = *hi - *lo;
     auto rms_pct = [&](const std::vector<double>& pred) {
       double ss = 0.0;
       std::size_t count = 0;
@@ -1160,7 +1161,7 @@ TEST(Diagnose, PerReadingPredictionsGiveTheReportedErrors) {
         ss += (data.output[t] - pred[t]) * (data.output[t] - pred[t]);
         ++count;
       }
-      return 100.0 * std::sqrt(ss / static_cast<double>(count)) / (*hi - *lo);
+      return 100.0 * std::sqrt(ss / static_cast<double>(count)) / range;
     };
     std::size_t scored = 0;
     for (std::size_t t = 0; t < n; ++t) {

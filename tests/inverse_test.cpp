@@ -21,6 +21,7 @@ TEST(PreisachInverse, ReproducesEveryReachableTargetAlongRandomHistories) {
     PreisachState plant = PreisachState::negative_saturation(grid);
     const auto u = testing::random_history(rng, grid, 200);
     std::vector<double> targets;
+    targets.reserve(u.size());
     for (double v : u) targets.push_back(model.step(plant, v));
     PreisachInverter inverter(model);
     PreisachState memory = PreisachState::negative_saturation(grid);
@@ -83,6 +84,7 @@ struct Play {
 std::vector<double> pi_operator(const std::vector<double>& r, const std::vector<double>& p,
                                 const std::vector<double>& x) {
   std::vector<Play> ops;
+  ops.reserve(r.size());
   for (double ri : r) ops.push_back({ri});
   std::vector<double> y;
   for (double xi : x) {
@@ -117,6 +119,7 @@ TEST(PaperGpiInverse, Eq11InvertsAPositiveWeightPiOperatorAndFailsForNegativeWei
   // The correction: Pi = -Pi+, so invert Pi+ on -y.
   const std::vector<double> y_neg = pi_operator(r, neg, x);
   std::vector<double> minus_y;
+  minus_y.reserve(y_neg.size());
   for (double v : y_neg) minus_y.push_back(-v);
   const std::vector<double> x_fixed = pi_operator(inv.radii, inv.weights, minus_y);
   for (std::size_t t = 0; t < x.size(); ++t) ASSERT_NEAR(x_fixed[t], x[t], 1e-9) << t;

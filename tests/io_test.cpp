@@ -18,7 +18,7 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path temp_dir() {
-  const fs::path d = fs::temp_directory_path() / ("scpkit_io_test_" + std::to_string(::getpid()));
+  fs::path d = fs::temp_directory_path() / ("scpkit_io_test_" + std::to_string(::getpid()));
   fs::create_directories(d);
   return d;
 }

@@ -457,7 +457,7 @@ TEST(PreisachFit, AnErrorOnAWorkerThreadReachesTheCaller) {
   opt.levels = 6;
   opt.smoothness = 0.0;
   opt.threads = 4;
-  opt.output_filter = [](Eigen::Ref<Eigen::VectorXd>) {
+  opt.output_filter = [](const Eigen::Ref<Eigen::VectorXd>&) {
     throw IdentificationError("filter failed");
   };
   EXPECT_THROW_MSG(fit_preisach(u, y, {}, opt), IdentificationError, "filter failed");

@@ -216,6 +216,7 @@ TEST(Preisach, MinorLoopsBetweenTheSameExtremaAreCongruent) {
       s.apply(u1);                                      // reversal at u1
       const double y0 = model.output(s);
       std::vector<double> inc;
+      inc.reserve(loop.size());
       for (double v : loop) inc.push_back(model.step(s, v) - y0);
       increments.push_back(inc);
     }
@@ -326,6 +327,7 @@ TEST(Preisach, AverageOfShiftedGridsIsOnePreisachOperator) {
   const PreisachGrid fine{lo - (S - 1) * h / S, lo + (L + 1) * h, (L + 1) * S + S - 1};
   const PreisachModel mean = average_on_fine_grid(models, fine);
   std::vector<PreisachState> states;
+  states.reserve(models.size());
   for (const auto& m : models) states.push_back(PreisachState::negative_saturation(m.grid()));
   PreisachState fs = PreisachState::negative_saturation(fine);
   std::uniform_real_distribution<double> U(lo, hi);

@@ -56,6 +56,7 @@ struct HeldOut {
   std::unique_ptr<const diagnosis::Record> rec;
   std::unique_ptr<const diagnosis::Baseline> base;
   std::unique_ptr<diagnosis::Context> ctx;
+  std::vector<ProtocolLimit> limits;  ///< protocol_limits_of the data, read once
 };
 
 /// Holds out the record's folds. When too few held-out readings lie within the inputs their
@@ -68,6 +69,7 @@ struct HeldOut {
 HeldOut hold_out(const DiagnoseData& data, const DiagnoseOptions& options,
                  diagnosis::FoldScheme scheme = diagnosis::FoldScheme::load_segments) {
   int last_folds = 0;
+  std::vector<ProtocolLimit> limits;
   for (int folds = options.folds;; folds *= 2) {
     HeldOut h;
     auto opt = std::make_unique<DiagnoseOptions>(options);
@@ -80,7 +82,7 @@ HeldOut hold_out(const DiagnoseData& data, const DiagnoseOptions& options,
     // baseline's misfit takes part of it up), creep's extensions need min_gain_pct like the
     // others (measured, session 83: a clean rig voltage record of equal holds under AR(1)
     // noise, rho 0.6, a Kelvin element gaining 2.2 % at p = 0.004).
-    const std::vector<ProtocolLimit> limits = protocol_limits_of(data);
+    if (folds == options.folds) limits = protocol_limits_of(data);  // once, data checked
     if (std::any_of(limits.begin(), limits.end(),
                     [](const ProtocolLimit& l) { return l.effect == "creep"; }))
       opt->min_creep_gain_pct = std::max(opt->min_creep_gain_pct, opt->min_gain_pct);
@@ -89,6 +91,7 @@ HeldOut hold_out(const DiagnoseData& data, const DiagnoseOptions& options,
     h.base = std::make_unique<const diagnosis::Baseline>(*h.rec, h.opt->baseline);
     try {
       h.ctx = std::make_unique<diagnosis::Context>(*h.rec, *h.base, *h.opt);
+      h.limits = std::move(limits);
       return h;
     } catch (const diagnosis::TooFewHeldOut&) {
       if (h.rec->folds <= last_folds || h.rec->fold_kind != "cycles") throw;
@@ -206,7 +209,7 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   const std::vector<std::size_t> identified_rows = diagnosis::identified_scored(ctx);
   d.identified_rows = identified_rows.size();
   d.identified_sustained_rms_pct_range = sustained_rms_pct(ctx, identified_rows);
-  d.protocol_limits = protocol_limits_of(data);
+  d.protocol_limits = held.limits;
   d.baseline_prediction.assign(rec.size(), std::numeric_limits<double>::quiet_NaN());
   for (std::size_t t : ctx.scored) d.baseline_prediction[t] = ctx.oof[t];
   d.heldout_fold.resize(rec.size());

@@ -17,9 +17,9 @@
 //    (1.4826 MAD / sqrt 2) and the sensor's quantisation step q (q^2 / 12).
 // 3. One detector per named effect: the extension the effect implies (PHYSICS.md section 5),
 //    fitted without each block and scored on it exactly as the baseline; detected when it
-//    gains >= min_gain_pct of held-out E_RMS (creep: min_creep_gain_pct) and the gain is
-//    significant against random sign
-//    flips of per-block gains; effects defined by a residual signature must also pass a
+//    gains >= min_gain_pct of held-out E_RMS (creep: min_creep_gain_pct, raised to
+//    min_gain_pct where the protocol hides creep) and the gain is significant against random
+//    sign flips of per-block gains; effects defined by a residual signature must also pass a
 //    block-permutation test of that signature (blocks of residuals keep their autocorrelation)
 //    at alpha, and then its gain need only be significant at gain_alpha (an intersection-union
 //    test: its level is still alpha, since the signature alone is a level-alpha test).
