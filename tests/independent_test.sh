@@ -301,6 +301,11 @@
 #   2.3 % at p = 0.001) and a second-generator load creep (seed 98003, a Kelvin element gaining
 #   4.5 % at p = 0.009), both `none` before: `creep`. And a clean third-generator load record
 #   (seed 99510) whose element gains 4.8 % at p = 0.051: `none`.
+# - Session 84: the lonely stroke's offset across loads counts at p < alpha 1e-4 whatever its
+#   size against the noise: fourth-generator voltage lonely strokes at 1.9 and 1.1 noise sd
+#   (seeds 98000 and 98003, p = 3.8e-9 and 1.7e-8), `none` before: `lonely_stroke`. And a
+#   third-generator voltage creep (seed 99202, p = 3.4e-9), `none` before: `creep` (the lag
+#   carried across load changes offsets the first rises too).
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -358,6 +363,9 @@ make_cases e e 1 99108 voltage-drift
 make_cases c c 1 98001 voltage-creep
 make_cases b b 1 98003 load-creep
 make_cases c c 1 99510 load-none
+make_cases d d 1 98000 voltage-lonely_stroke
+make_cases d d 1 98003 voltage-lonely_stroke
+make_cases c c 1 99202 voltage-creep
 make_cases c c 2 703 voltage-creep
 make_cases b b 1 2003 voltage-drift
 make_cases c c 1 1700 voltage-creep
@@ -594,5 +602,8 @@ expect "$work/e/voltage-drift-99108.csv" drift
 expect "$work/c/voltage-creep-98001.csv" creep
 expect "$work/b/load-creep-98003.csv" creep
 expect "$work/c/load-none-99510.csv" none
+expect "$work/d/voltage-lonely_stroke-98000.csv" lonely_stroke
+expect "$work/d/voltage-lonely_stroke-98003.csv" lonely_stroke
+expect "$work/c/voltage-creep-99202.csv" creep
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]
