@@ -96,12 +96,10 @@ Signs read_signs(const Context& ctx) {
   // 80-84, p < 1e-5 only on lonely strokes and creeps, the smallest p on the 399 clean ones
   // 0.0064, and 0.0048 on 60 clean ones under AR(1) noise of rho 0.7).
   const auto& rp = ctx.return_point.running_max;
+  const bool large = std::abs(rp.estimate) >= kLonelyOffsetNoises * ctx.noise_sd;
   const bool far = rp.p_value < opt.alpha * kLonelyOffsetFarLevel;
-  signs.lonely_offset_across_loads =
-      rec.several_loads && !rec.input_is_load && rp.available &&
-      ((rp.p_value < opt.alpha / 10.0 &&
-        std::abs(rp.estimate) >= kLonelyOffsetNoises * ctx.noise_sd) ||
-       far);
+  signs.lonely_offset_across_loads = rec.several_loads && !rec.input_is_load && rp.available &&
+                                     rp.p_value < opt.alpha / 10.0 && (large || far);
   return signs;
 }
 

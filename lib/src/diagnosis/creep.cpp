@@ -383,7 +383,7 @@ Finding kelvin_creep(Context& ctx) {
     f.evidence +=
         fmt::format("; {}, from {:.3f} to {:.3f} % of range (sign-flip p = {:.3f})",
                     on_identified_readings(identified), s.rms_before, s.rms_after, s.p_value);
-    if (s.p_value < ctx.opt.alpha && s.gain_pct >= ctx.opt.min_creep_gain_pct) {
+    if (s.p_value < ctx.opt.alpha && s.gain_pct >= least_gain_pct(ctx.opt, "creep")) {
       f.on_identified = f.detected = true;
       f.heldout_rms_before = s.rms_before;
       f.heldout_rms_after = s.rms_after;
@@ -404,9 +404,9 @@ Finding kelvin_creep(Context& ctx) {
     if (ctx.lag.available) {
       f.evidence += "; " + describe_lag(ctx.lag);
       // Intersection-union: the lag in readings of one memory state at alpha, the element
-      // gaining at gain_alpha and at least min_creep_gain_pct.
+      // gaining at gain_alpha and at least creep's least gain (least_gain_pct).
       if (!f.detected && ctx.lag.p_value < ctx.opt.alpha && f.p_value < ctx.opt.gain_alpha &&
-          f.gain_pct >= ctx.opt.min_creep_gain_pct) {
+          f.gain_pct >= least_gain_pct(ctx.opt, "creep")) {
         f.detected = true;
         f.evidence += "; named by the lag in readings of one memory state and this gain";
       }
