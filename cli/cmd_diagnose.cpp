@@ -263,6 +263,7 @@ int run_diagnose(const std::vector<std::string>& args) {
                   {"identified_rows", d.identified_rows},
                   {"identified_sustained_rms_pct_range", d.identified_sustained_rms_pct_range}}},
                 {"noise_floor_pct_range", d.noise_floor_pct_range},
+                {"noise_correlation", d.noise_correlation},
                 {"findings", findings},
                 {"cause", d.cause},
                 {"cause_note", d.cause_note},
@@ -273,9 +274,10 @@ int run_diagnose(const std::vector<std::string>& args) {
                            out.column);
   std::cout << fmt::format(
       "  baseline {}, held out by {} in {} folds ({} readings scored): E_RMS {:.3f} %, E_max "
-      "{:.3f} % of range (E_RMS without the largest 5 %: {:.3f} %); noise floor {:.3f} %\n",
+      "{:.3f} % of range (E_RMS without the largest 5 %: {:.3f} %); noise floor {:.3f} % (lag-one "
+      "correlation {:.2f})\n",
       d.baseline_model, d.heldout_by, d.heldout_folds, d.heldout_rows, d.rms_pct_range,
-      d.max_pct_range, d.sustained_rms_pct_range, d.noise_floor_pct_range);
+      d.max_pct_range, d.sustained_rms_pct_range, d.noise_floor_pct_range, d.noise_correlation);
   for (const Finding& f : d.findings) {
     if (!f.tested) {
       std::cout << fmt::format("  {:<24} not tested: {}\n", f.effect, f.evidence);

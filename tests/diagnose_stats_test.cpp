@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numeric>
 #include <random>
@@ -477,8 +478,11 @@ TEST(CongruencySignature, ASpikeAtATurningValueIsNotNonCongruence) {
 // A voltage test: eight constant-load segments of three full cycles 0 -> 1 -> 0 each, one
 // reading per step and second. A classical Preisach truth plus a linear term and an offset per
 // load, a linear drift of `drift` (in units of the range over the record) and sensor noise that
-// is AR(1) with lag-one correlation `rho` (white at 0).
-Record cycles_with_noise(std::mt19937& rng, double noise, double rho, double drift) {
+// is AR(1) with lag-one correlation `rho` (white at 0). `nested`: the three cycles go to 1, 3/4
+// and 1/2 in steps of 1/8, 3/32 and 1/16, so readings of one memory state (rising from 0 to an
+// input the cycles share) are few and never next to each other in two cycles.
+Record cycles_with_noise(std::mt19937& rng, double noise, double rho, double drift,
+                         bool nested = false) {
   const PreisachGrid grid{0.0, 1.0, 10};
   const PreisachModel model = testing::random_model(rng, grid);
   std::normal_distribution<double> N(0.0, 1.0);
@@ -489,8 +493,10 @@ Record cycles_with_noise(std::mt19937& rng, double noise, double rho, double dri
     PreisachState state = PreisachState::negative_saturation(grid);
     std::vector<double> u{0.0};
     for (int c = 0; c < 3; ++c) {
-      for (int k = 1; k <= 8; ++k) u.push_back(k / 8.0);
-      for (int k = 7; k >= 0; --k) u.push_back(k / 8.0);
+      const double step =
+          nested ? std::array{4.0, 3.0, 2.0}[static_cast<std::size_t>(c)] / 32.0 : 1.0 / 8.0;
+      for (int k = 1; k <= 8; ++k) u.push_back(k * step);
+      for (int k = 7; k >= 0; --k) u.push_back(k * step);
     }
     for (double v : u) {
       clean.push_back(model.step(state, v) + 5.0 * v + 0.5 * s);
@@ -527,16 +533,24 @@ double rate_below(double level, unsigned seed, Draw draw) {
   return static_cast<double>(below) / std::max(trials, 1);
 }
 
+// How the records of return_point_rate are drawn and read.
+struct ReturnPointDraw {
+  bool running_max = false;  ///< the running-maximum signature (else the time signature)
+  bool nested = false;       ///< cycles_with_noise's nested loops
+  bool told_rho = false;     ///< the noise's lag-one correlation given to the test
+};
+
 // How often the return-point time signature (readings in the same memory state, apart in time:
 // the drift's model-free evidence), or with `running_max` the running-maximum signature (the
 // lonely stroke's), falls below `level` on 300 records.
 double return_point_rate(double rho, double drift, double level, unsigned seed,
-                         bool running_max = false) {
+                         ReturnPointDraw how = {}) {
   return rate_below(level, seed, [&](std::mt19937& rng) {
     const double noise = 0.01;
-    const Record rec = cycles_with_noise(rng, noise, rho, drift * noise);
-    const ReturnPointSignatures both = return_point_signatures(rec, noise * rec.range);
-    return running_max ? both.running_max : both.time;
+    const Record rec = cycles_with_noise(rng, noise, rho, drift * noise, how.nested);
+    const ReturnPointSignatures both =
+        return_point_signatures(rec, noise * rec.range, how.told_rho ? rho : 0.0);
+    return how.running_max ? both.running_max : both.time;
   });
 }
 
@@ -557,6 +571,18 @@ TEST(ReturnPointSignature, SensorNoiseThatIsNotWhiteIsNotADrift) {
   }
 }
 
+TEST(ReturnPointSignature, NoiseThatIsNotWhiteIsNotAnEffectOnNestedLoops) {
+  // Nested loops of other steps leave no two pairs whose readings both moved on by one, so the
+  // pairs cannot show the noise's correlation, and the record's estimate (Context::noise_rho)
+  // is given instead. AR(1) noise at rho 0.8, 300 records each: the time signature fell below
+  // 0.01 in 4.3 % of them without it and 1.0 % with it; the running-maximum signature in 7.3 %
+  // and 0.7 %.
+  EXPECT_LT(return_point_rate(0.8, 0.0, 0.01, 27, {.nested = true, .told_rho = true}), 0.025);
+  EXPECT_LT(return_point_rate(0.8, 0.0, 0.01, 29,
+                              {.running_max = true, .nested = true, .told_rho = true}),
+            0.025);
+}
+
 // The running-maximum signature pairs each first-rise reading with the same state in the next
 // cycle, and that reading with the one after (a -> b, b -> c), so rows share readings; with
 // AR(1) noise readings close in the record move together though their rows lie apart. With
@@ -565,8 +591,8 @@ TEST(ReturnPointSignature, SensorNoiseThatIsNotWhiteIsNotADrift) {
 // AR(1) readings (signatures.cpp, least_squares) in 5 and 5 (17 and 11). White: 1 either way.
 TEST(ReturnPointSignature, RunningMaximumCalibratedUnderNoiseThatIsNotWhite) {
   for (double rho : {0.0, 0.5, 0.8}) {
-    EXPECT_LT(return_point_rate(rho, 0.0, 0.01, 25, true), 0.03) << "rho " << rho;
-    EXPECT_LT(return_point_rate(rho, 0.0, 0.05, 26, true), 0.09) << "rho " << rho;
+    EXPECT_LT(return_point_rate(rho, 0.0, 0.01, 25, {.running_max = true}), 0.03) << "rho " << rho;
+    EXPECT_LT(return_point_rate(rho, 0.0, 0.05, 26, {.running_max = true}), 0.09) << "rho " << rho;
   }
 }
 

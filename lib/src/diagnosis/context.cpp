@@ -225,10 +225,13 @@ Context::Context(const Record& record, const Baseline& b, const DiagnoseOptions&
   // one reading structure as correlation, the training one missing the noise's slow part. The
   // smaller left the floor low under AR(1) noise, the larger hid a knee the maps miss
   // (docs/diagnose-log.md, sessions 77 and 78).
-  noise_sd = noise(0.5 * (spread_ratio_correlation(dr, heldout_differences(*this, 2)) +
-                          training_noise_correlation(*this)));
+  noise_rho = 0.5 * (spread_ratio_correlation(dr, heldout_differences(*this, 2)) +
+                     training_noise_correlation(*this));
+  noise_sd = noise(noise_rho);
   rms_before = 100.0 * rms(rs) / rec.range;
-  return_point = return_point_signatures(rec, floor);
+  // The return-point signatures' pairs show the noise's correlation only where cycles repeat
+  // reading for reading (signatures.cpp, ar1_difference_cov); elsewhere the floor's stands in.
+  return_point = return_point_signatures(rec, floor, noise_rho);
   const CongruencySignatures loops = congruency_signatures(rec);
   congruency = loops.raw;
   congruency_robust = loops.robust;

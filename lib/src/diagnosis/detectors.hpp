@@ -37,6 +37,7 @@ struct Context {
   /// The noise's standard deviation with its lag-one correlation in time included: the noise
   /// floor the held-out error is judged against (output units).
   double noise_sd = 0.0;
+  double noise_rho = 0.0;   ///< that lag-one correlation
   double resolution = 0.0;  ///< sensor step (0: continuous)
   /// The sensor step dominates the noise (over twice its white part): the same true value
   /// rounds the same way every time, and a motion below the step is not read at all.

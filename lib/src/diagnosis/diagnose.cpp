@@ -205,6 +205,7 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   for (std::size_t t : ctx.scored) rmax = std::max(rmax, std::abs(ctx.r[t]));
   d.max_pct_range = 100.0 * rmax / rec.range;
   d.noise_floor_pct_range = 100.0 * ctx.noise_sd / rec.range;
+  d.noise_correlation = ctx.noise_rho;
   d.sustained_rms_pct_range = sustained_rms_pct(ctx, ctx.scored);
   const std::vector<std::size_t> identified_rows = diagnosis::identified_scored(ctx);
   d.identified_rows = identified_rows.size();

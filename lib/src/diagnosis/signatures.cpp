@@ -196,6 +196,9 @@ struct Regression {
 struct ReadingPairs {
   std::vector<std::pair<std::size_t, std::size_t>> rows;
   std::vector<char> plain;
+  /// The noise's lag-one correlation as the record's residuals show it (0: unknown), for rows
+  /// that cannot show it themselves (ar1_difference_cov).
+  double noise_rho = 0.0;
 };
 
 /// Rows that are differences of readings share readings (a -> b, b -> c: the state met
@@ -213,12 +216,17 @@ struct ReadingPairs {
 /// after (the time z 0.96 either way); on clean voltage tests with AR(1) noise, rho 0.5 and 0.8, it
 /// fell below 0.01 in 6-9 % of records before and 1.7 % after (test
 /// RunningMaximumCalibratedUnderNoiseThatIsNotWhite).
+/// Fewer rows than this whose readings both moved on by one from the row before: the rows'
+/// own estimate of the noise's correlation yields to the record's (ar1_difference_cov).
+constexpr int kMinMovedOnRows = 10;
+
 Eigen::MatrixXd ar1_difference_cov(const Eigen::MatrixXd& X, const Eigen::VectorXd& e,
                                    const ReadingPairs& pairs, double var, double var_floor,
                                    const Eigen::MatrixXd& bread) {
   const Eigen::Index n = X.rows(), m = X.cols();
   double num = 0.0, den = 0.0;
   std::size_t last = 0;
+  int moved_on = 0;  // rows whose readings both moved on by one from the row before
   for (Eigen::Index i = 0; i < n; ++i) {
     const auto ii = static_cast<std::size_t>(i);
     const auto& [a0, b0] = pairs.rows[ii];
@@ -228,8 +236,21 @@ Eigen::MatrixXd ar1_difference_cov(const Eigen::MatrixXd& X, const Eigen::Vector
     if (a1 != a0 + 1 || b1 != b0 + 1 || !pairs.plain[ii] || !pairs.plain[ii + 1]) continue;
     num += e[i] * e[i + 1];
     den += 0.5 * (e[i] * e[i] + e[i + 1] * e[i + 1]);
+    ++moved_on;
   }
-  const double rho = den > 0.0 ? std::clamp(num / den, 0.0, 0.9) : 0.0;
+  // Rows whose readings both moved on by one exist where cycles repeat reading for reading;
+  // where there are fewer than kMinMovedOnRows (nested loops of other steps: the states met
+  // again are few and far apart), the rows say little of the correlation, and the floor's
+  // estimate (Context::noise_rho) stands in. Not beside the rows' own, and not the training
+  // residuals' lag-one correlation read directly: a record's residuals carry an effect's misfit,
+  // which reads as correlated noise (measured, session 85: the direct estimate as a least value
+  // lost the rig's 3 % lonely stroke at one load, seed 1095, and a second-generator drift, 7600,
+  // both pinned). Measured on 100 clean voltage records of the first independent generator
+  // under AR(1) noise of rho 0.7 (seeds 99960-100059), none with such rows: the time signature
+  // below 0.05 on 10 and below 0.01 on 4 before, 7 and 3 after; the running maximum's on 11 and
+  // 6 before, 4 and 3 after.
+  const double own = den > 0.0 ? std::clamp(num / den, 0.0, 0.9) : 0.0;
+  const double rho = moved_on < kMinMovedOnRows ? std::max(pairs.noise_rho, own) : own;
   Eigen::MatrixXd v = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(last + 1), m);
   double expect = 0.0;
   for (Eigen::Index i = 0; i < n; ++i) {
@@ -387,13 +408,14 @@ ReturnPointDesign return_point_design(const Record& rec) {
 
 }  // namespace
 
-ReturnPointSignatures return_point_signatures(const Record& rec, double sigma) {
+ReturnPointSignatures return_point_signatures(const Record& rec, double sigma, double noise_rho) {
   ReturnPointSignatures out;
   out.running_max.what =
       "readings in the same memory state, before and after the running "
       "maximum of the input grew";
   out.time.what = "readings in the same memory state, apart in time";
-  const ReturnPointDesign design = return_point_design(rec);
+  ReturnPointDesign design = return_point_design(rec);
+  design.pairs.noise_rho = noise_rho;
   const Eigen::MatrixXd& X = design.X;
   const Eigen::VectorXd& y = design.d;
   const Eigen::Index m = design.m;

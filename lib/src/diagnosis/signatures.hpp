@@ -63,8 +63,10 @@ std::vector<char> identified_readings(const Record& rec, int levels);
 /// moves, within a segment), rounded: the number of input steps the record resolves.
 double input_steps(const Record& rec);
 
-/// `sigma`: the noise of one reading (the diagnosis' floor).
-ReturnPointSignatures return_point_signatures(const Record& rec, double sigma);
+/// `sigma`: the noise of one reading (the diagnosis' floor); `noise_rho`: its lag-one
+/// correlation as the record shows it, used where the pairs cannot show it (0: unknown).
+ReturnPointSignatures return_point_signatures(const Record& rec, double sigma,
+                                              double noise_rho = 0.0);
 /// Creep read where a rate-independent model cannot take it up: readings in one memory state
 /// must read the same, while a lag leaves each reading short of its value by what the recent
 /// path moved. `lag` per row: a Kelvin element's departure from a rate-independent prediction

@@ -75,6 +75,9 @@ struct Diagnosis {
   /// held-out E_RMS without its largest 5 % of residuals: what `none` is judged on
   double sustained_rms_pct_range = 0.0;
   double noise_floor_pct_range = 0.0;
+  /// The noise's lag-one correlation in time as the residuals show it (0: white), which the
+  /// floor and the return-point signatures allow for.
+  double noise_correlation = 0.0;
   /// Held-out readings whose memory the training folds identified (every Everett pair of the
   /// memory observed in training), and their sustained E_RMS: `unexplained` needs both.
   std::size_t identified_rows = 0;
