@@ -246,9 +246,9 @@ Eigen::MatrixXd ar1_difference_cov(const Eigen::MatrixXd& X, const Eigen::Vector
   // which reads as correlated noise (measured, session 85: the direct estimate as a least value
   // lost the rig's 3 % lonely stroke at one load, seed 1095, and a second-generator drift, 7600,
   // both pinned). Measured on 100 clean voltage records of the first independent generator
-  // under AR(1) noise of rho 0.7 (seeds 99960-100059), none with such rows: the time signature
-  // below 0.05 on 10 and below 0.01 on 4 before, 7 and 3 after; the running maximum's on 11 and
-  // 6 before, 4 and 3 after.
+  // under AR(1) noise of rho 0.7 (seeds 99960-100059), most with fewer such rows: the time
+  // signature below 0.05 on 10 and below 0.01 on 4 before, 7 and 3 after; the running maximum's on
+  // 11 and 6 before, 4 and 3 after.
   const double own = den > 0.0 ? std::clamp(num / den, 0.0, 0.9) : 0.0;
   const double rho = moved_on < kMinMovedOnRows ? std::max(pairs.noise_rho, own) : own;
   Eigen::MatrixXd v = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(last + 1), m);
