@@ -201,6 +201,10 @@ struct ReadingPairs {
   double noise_rho = 0.0;
 };
 
+/// Fewer rows than this whose readings both moved on by one from the row before: the rows'
+/// own estimate of the noise's correlation yields to the record's (ar1_difference_cov).
+constexpr int kMinMovedOnRows = 10;
+
 /// Rows that are differences of readings share readings (a -> b, b -> c: the state met
 /// three times), and with AR(1) noise readings close in the record move together though
 /// their rows are far apart in the regression. The coefficients' covariance under that
@@ -216,10 +220,6 @@ struct ReadingPairs {
 /// after (the time z 0.96 either way); on clean voltage tests with AR(1) noise, rho 0.5 and 0.8, it
 /// fell below 0.01 in 6-9 % of records before and 1.7 % after (test
 /// RunningMaximumCalibratedUnderNoiseThatIsNotWhite).
-/// Fewer rows than this whose readings both moved on by one from the row before: the rows'
-/// own estimate of the noise's correlation yields to the record's (ar1_difference_cov).
-constexpr int kMinMovedOnRows = 10;
-
 Eigen::MatrixXd ar1_difference_cov(const Eigen::MatrixXd& X, const Eigen::VectorXd& e,
                                    const ReadingPairs& pairs, double var, double var_floor,
                                    const Eigen::MatrixXd& bread) {
