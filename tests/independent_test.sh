@@ -306,6 +306,10 @@
 #   (seeds 98000 and 98003, p = 3.8e-9 and 1.7e-8), `none` before: `lonely_stroke`. And a
 #   third-generator voltage creep (seed 99202, p = 3.4e-9), `none` before: `creep` (the lag
 #   carried across load changes offsets the first rises too).
+# - Session 86: what the maps miss at the held-out loads read from six loads on too, where the
+#   exponential knee does not name it: a fourth-generator hinge of 26 % at six loads (seed
+#   98301, the knee maps losing 72 %, the per-segment maps explaining 97 % of the held-out
+#   residuals), `unexplained` before: `offset_nonlinearity`.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -366,6 +370,7 @@ make_cases c c 1 99510 load-none
 make_cases d d 1 98000 voltage-lonely_stroke
 make_cases d d 1 98003 voltage-lonely_stroke
 make_cases c c 1 99202 voltage-creep
+make_cases d d 1 98301 voltage-offset_nonlinearity
 make_cases c c 2 703 voltage-creep
 make_cases b b 1 2003 voltage-drift
 make_cases c c 1 1700 voltage-creep
@@ -605,5 +610,6 @@ expect "$work/c/load-none-99510.csv" none
 expect "$work/d/voltage-lonely_stroke-98000.csv" lonely_stroke
 expect "$work/d/voltage-lonely_stroke-98003.csv" lonely_stroke
 expect "$work/c/voltage-creep-99202.csv" creep
+expect "$work/d/voltage-offset_nonlinearity-98301.csv" offset_nonlinearity
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]
