@@ -401,10 +401,10 @@ void name_by_signature(Context& ctx, Diagnosis& d, const Signs& signs, bool mate
   // 1e-4 and robust 0.0017, was `none` at alpha / 10; no record of 192 spiked ones and 40 other
   // moving-Preisach ones changed its name at alpha / 5; the one clean record of 100 with minor
   // loops whose raw p is below alpha / 10 (0.00088) has robust p 0.022.
-  // Below five loads, and at five where the cubic maps do not name it, offset_nonlinearity's
-  // finding is a signature alone (few_loads_signature in load_maps.cpp): the share of the held-out
-  // residuals that a per-segment affine map of H explains, named where the residuals are material
-  // (maps_miss_by_signature).
+  // Below five loads, and from five on where the held-out maps (cubic, knee) do not name it,
+  // offset_nonlinearity's finding is a signature alone (few_loads_signature in load_maps.cpp):
+  // the share of the held-out residuals that a per-segment affine map of H explains, named where
+  // the residuals are material (maps_miss_by_signature).
   bool maps_miss = false;
   double maps_share = 0.0;
   for (const Finding& f : d.findings) {

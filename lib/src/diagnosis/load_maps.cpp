@@ -84,7 +84,8 @@ double segment_map_share(const Context& ctx, const Eigen::VectorXd& r) {
 // constant or proportional to H within a segment. The signature is the share of the held-out
 // residuals' sum of squares that such per-segment maps explain, against blocks of the
 // residuals permuted across the scored rows. It names no cause here; diagnose() names it when
-// the residuals are material and nothing else is detected.
+// the residuals are material and nothing else is detected. From five loads on it is read where
+// the held-out maps do not name the effect (detect_offset_nonlinearity).
 // few_loads_signature's extended model: none is fitted, the finding is a signature alone.
 constexpr const char* kNoMapFitted =
     "none fitted: what the maps miss at the held-out loads, read off the residuals";
