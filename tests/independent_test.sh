@@ -310,6 +310,12 @@
 #   exponential knee does not name it: a fourth-generator hinge of 26 % at six loads (seed
 #   98301, the knee maps losing 72 %, the per-segment maps explaining 97 % of the held-out
 #   residuals), `unexplained` before: `offset_nonlinearity`.
+# - Session 87: a load drift is named only where the training residuals trend the same way at
+#   gain_alpha, whatever share of the held-out readings is identified: clean first-generator
+#   load records under AR(1) noise of rho 0.7 (seeds 98420 and 98429, the trend gaining 11.3
+#   and 10.2 % on held-out cycles, the training trend at t = 1.02 and 0.49), `drift` before:
+#   `none`. And a fourth-generator drift with that trend at t = -2.1 (seed 98000, p = 0.018),
+#   which a level of alpha would lose: `drift`.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -371,6 +377,9 @@ make_cases d d 1 98000 voltage-lonely_stroke
 make_cases d d 1 98003 voltage-lonely_stroke
 make_cases c c 1 99202 voltage-creep
 make_cases d d 1 98301 voltage-offset_nonlinearity
+make_cases a ar 1 98420 load-none --ar-noise 0.7
+make_cases a ar 1 98429 load-none --ar-noise 0.7
+make_cases d d 1 98000 load-drift
 make_cases c c 2 703 voltage-creep
 make_cases b b 1 2003 voltage-drift
 make_cases c c 1 1700 voltage-creep
@@ -611,5 +620,8 @@ expect "$work/d/voltage-lonely_stroke-98000.csv" lonely_stroke
 expect "$work/d/voltage-lonely_stroke-98003.csv" lonely_stroke
 expect "$work/c/voltage-creep-99202.csv" creep
 expect "$work/d/voltage-offset_nonlinearity-98301.csv" offset_nonlinearity
+expect "$work/ar/load-none-98420.csv" none
+expect "$work/ar/load-none-98429.csv" none
+expect "$work/d/load-drift-98000.csv" drift
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]
