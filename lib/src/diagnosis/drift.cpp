@@ -408,8 +408,8 @@ Finding detect_drift(Context& ctx) {
   //   offsets constant over each fold that follow the protocol, and a trend takes them up on
   //   held-out cycles (clean first-generator load records under AR(1) noise of rho 0.7, seeds
   //   98400-98459: 7 of 60 named `drift`, gains 4-11 % at sign-flip p 0.001-0.049; two had t of
-  //   1.02 and 0.49). The 34 load drifts of the fresh set (seeds 98000-98007) named `drift` had
-  //   t beyond 2.1 (p <= 0.018), most beyond 4.5.
+  //   1.02 and 0.49). The 29 load drifts of the fresh set (seeds 98000-98007) named `drift` had
+  //   t of 2.1 or more in size (p <= 0.018), 24 of them beyond 4.5.
   if (f.detected && !rec.several_loads && f.heldout_prediction.size() == rec.size()) {
     const double t = training_trend_t(ctx);
     LineSums correction;
