@@ -310,11 +310,11 @@
 #   exponential knee does not name it: a fourth-generator hinge of 26 % at six loads (seed
 #   98301, the knee maps losing 72 %, the per-segment maps explaining 97 % of the held-out
 #   residuals), `unexplained` before: `offset_nonlinearity`.
-# - Session 87: a load drift is named only where the training residuals trend the same way at
-#   gain_alpha, whatever share of the held-out readings is identified: clean first-generator
-#   load records under AR(1) noise of rho 0.7 (seeds 98420 and 98429, the trend gaining 11.3
-#   and 10.2 % on held-out cycles, the training trend at t = 1.02 and 0.49), `drift` before:
-#   `none`. And a fourth-generator drift with that trend at t = -2.1 (seed 98000, p = 0.018),
+# - Session 87: a drift held out by cycles is named only where the training residuals trend
+#   the same way at gain_alpha, whatever share of the held-out readings is identified: clean
+#   first-generator load records under AR(1) noise of rho 0.7 (seeds 98420 and 98429, the
+#   trend gaining 11.3 and 10.2 % on held-out cycles, the training trend at t = 1.02 and
+#   0.49), `drift` before: `none`. And a fourth-generator drift with that trend at t = -2.1 (seed 98000, p = 0.018),
 #   which a level of alpha would lose: `drift`.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
