@@ -137,7 +137,8 @@ bool creep_seen_without_model(const Context& ctx, const Diagnosis& d) {
   const auto nc = std::find_if(d.findings.begin(), d.findings.end(), [](const Finding& f) {
     return f.effect == "minor_loop_noncongruence";
   });
-  const bool loops_modelled = nc == d.findings.end() || !nc->tested || nc->gain_pct > 0.0;
+  const bool loops_modelled =
+      nc == d.findings.end() || !nc->tested || (nc->gain_pct > 0.0 && !ctx.loops_unclosed);
   const bool lag_seen =
       ctx.lag.available && ctx.lag.p_value < ctx.opt.alpha &&
       !(ctx.congruency.available && ctx.congruency.p_value < ctx.opt.alpha && loops_modelled);
@@ -175,7 +176,7 @@ const Finding* named_by_extension(const Context& ctx, const Diagnosis& d, const 
   // combination of the two p-values, a rig drift of 12 % whose map gained 0.9 % at p = 0.017,
   // signature 0.032, was named minor_loop_noncongruence over the trend's 44.9 %).
   const Finding* nc = detected("minor_loop_noncongruence");
-  const bool nc_seen = nc && ctx.congruency.p_value < opt.alpha;
+  const bool nc_seen = nc && ctx.congruency.p_value < opt.alpha && !ctx.loops_unclosed;
   for (const char* e : {"outliers", "creep", "minor_loop_noncongruence"}) {
     const Finding* f = detected(e);
     if (f == creep && !creep_seen) continue;

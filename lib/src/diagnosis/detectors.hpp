@@ -62,6 +62,10 @@ struct Context {
   /// (detect_drift, tests held out by load segment): a trend no map of the load makes, so an
   /// offset nonlinearity yields to it (cause.cpp).
   bool drift_within_segments = false;
+  /// The non-congruence finding is the term without wiping-out (detect_noncongruence): its
+  /// evidence is readings in one memory state that differ, which a drift shows too, not the
+  /// congruency signature, so it competes by gain (cause.cpp).
+  bool loops_unclosed = false;
   /// The flagged readings' removal gain the outliers finding was judged by (detect_outliers):
   /// on every other held-out reading, or on those whose memory both trainings identified where
   /// that is larger (% ; 0 where nothing was flagged).

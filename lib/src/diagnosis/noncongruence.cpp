@@ -4,24 +4,177 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "detectors.hpp"
+#include "stats.hpp"
 
 namespace scpkit::diagnosis {
 namespace {
 /// % of range: the least baseline error on identified readings the moving model is named on.
 constexpr double kLeastStructurePct = 0.2;
+
+/// A rate-independent Bouc-Wen state (n = 1) along the input path, the input x in units of its
+/// span: dz = dx - beta |dx| z - gamma dx |z|, from z = 0 at the record's start. Its loops do
+/// not close: returning to a turning point does not restore the state (no wiping-out).
+std::vector<double> bouc_wen_state(const Record& rec, double beta, double gamma) {
+  const auto [u_lo, u_hi] = std::minmax_element(rec.u.begin(), rec.u.end());
+  const double span = std::max(*u_hi - *u_lo, 1e-300);
+  std::vector<double> z(rec.size(), 0.0);
+  double state = 0.0;
+  for (std::size_t t = 1; t < rec.size(); ++t) {
+    const double dx = (rec.u[t] - rec.u[t - 1]) / span;
+    state += dx - beta * std::abs(dx) * state - gamma * dx * std::abs(state);
+    z[t] = state;
+  }
+  return z;
+}
+
+/// The minimum of a convex f on [lo, hi] by golden-section search, `steps` evaluations after
+/// the first two.
+double golden_section_min(const std::function<double(double)>& f, double lo, double hi, int steps) {
+  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+  double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo);
+  double f1 = f(x1), f2 = f(x2);
+  for (int i = 0; i < steps; ++i) {
+    if (f1 < f2) {
+      hi = x2;
+      x2 = x1;
+      f2 = f1;
+      x1 = hi - g * (hi - lo);
+      f1 = f(x1);
+    } else {
+      lo = x1;
+      x1 = x2;
+      f1 = f2;
+      x2 = lo + g * (hi - lo);
+      f2 = f(x2);
+    }
+  }
+  return 0.5 * (lo + hi);
+}
+
+/// Loops that do not close (session 88): a Bouc-Wen term beside the baseline,
+/// y = Gamma[u] + b z[u], z the state above. A Preisach model's memory is its turning points:
+/// readings in one memory state agree whatever came before (wiping-out). A term without
+/// wiping-out makes them differ with the path between them, so minor loops between the same
+/// extrema differ by history even where the protocol holds no such pair to compare. Per fold:
+/// (beta, gamma) chosen on a grid by the training residuals regressed on what the operator
+/// cannot make of z (z less its own fit, Frisch-Waugh); then b by the training error of the
+/// operator refitted to y - b z (without the smoothness penalty the squared distance of an
+/// affine path to the operator's convex cone, convex in b), on [0, 4 b0], b0 the Frisch-Waugh
+/// estimate, which the operator's constraints bias towards 0 (measured: fifth-generator
+/// records, the search's b 1.1-3.9 times b0, steadier over the folds).
+Finding loops_without_wiping_out(Context& ctx) {
+  const OwnStream own(ctx, 23);
+  const Record& rec = ctx.rec;
+  // beta + gamma is 1 / the state's saturation in units of the input span: from 1 (saturating
+  // over a full sweep) to 4; below 1 the state barely saturates over the record and grows with
+  // the path's length, a trend along a protocol whose path follows time (measured: 0.5 named a
+  // second-generator drift of 2 % under a damped protocol `minor_loop_noncongruence`).
+  constexpr double kSum[] = {1.0, 2.0, 4.0};
+  constexpr double kGammaShare[] = {0.0, 1.0 / 3.0};  // gamma / (beta + gamma)
+  // The response's direction: the state is projected on the operator's own cone, whose
+  // densities share the response's sign.
+  const double dir = response_direction(rec);
+  std::vector<std::vector<double>> states;
+  std::vector<std::pair<double, double>> params;
+  for (double sum : kSum) {
+    for (double share : kGammaShare) {
+      params.emplace_back(sum * (1.0 - share), sum * share);
+      states.push_back(bouc_wen_state(rec, params.back().first, params.back().second));
+      for (double& v : states.back()) v *= dir;
+    }
+  }
+  std::string chosen;
+  Finding f = model_finding(
+      ctx, "minor_loop_noncongruence",
+      "baseline fitted with a Bouc-Wen term b z, dz = dx - beta |dx| z - gamma dx |z| (x the "
+      "input in units of its span; beta, gamma and b chosen in-fold)",
+      [&](int k) {
+        const std::vector<char> train = ctx.train_mask(k);
+        const std::vector<double>& base = ctx.by_fold[static_cast<std::size_t>(k)].pred;
+        // The training residuals regressed on z less the operator's fit of it.
+        auto regress = [&](const std::vector<double>& z, bool quick) {
+          std::vector<double> zp = ctx.base.fit(train, {{}, &z, quick}).pred;
+          LineSums line;
+          for (std::size_t t = 0; t < rec.size(); ++t) {
+            if (train[t]) line.add(z[t] - zp[t], rec.y[t] - base[t]);
+          }
+          return line;
+        };
+        double best = std::numeric_limits<double>::infinity();
+        std::size_t pick = 0;
+        for (std::size_t j = 0; j < states.size(); ++j) {
+          const double sse = regress(states[j], true).sse();
+          if (sse < best) {
+            best = sse;
+            pick = j;
+          }
+        }
+        const std::vector<double>& z = states[pick];
+        const double b0 = regress(z, false).slope();
+        std::vector<double> w(rec.size());
+        auto less_term = [&](double b) {
+          for (std::size_t t = 0; t < rec.size(); ++t) w[t] = rec.y[t] - b * z[t];
+        };
+        const double b = golden_section_min(
+            [&](double b_try) {
+              less_term(b_try);
+              return training_sse(w, ctx.base.fit(train, {{}, &w, true}).pred, train);
+            },
+            std::min(0.0, 4.0 * b0), std::max(0.0, 4.0 * b0), 12);
+        chosen += fmt::format("{}{:g}/{:g}", chosen.empty() ? "" : ", ", params[pick].first,
+                              params[pick].second);
+        less_term(b);
+        std::vector<double> pred = ctx.base.fit(train, {{}, &w, false}).pred;
+        for (std::size_t t = 0; t < rec.size(); ++t) pred[t] += b * z[t];
+        return pred;
+      },
+      "loops that do not close (a hysteretic term without wiping-out)");
+  f.extended_model += " (beta/gamma per fold: " + chosen + ")";
+  return f;
+}
+
 }  // namespace
 
 Finding detect_noncongruence(Context& ctx) {
   const Record& rec = ctx.rec;
   const Signature& sig = ctx.congruency;
-  if (!sig.available || rec.several_loads)
+  // Load tests: loops that do not close (loops_without_wiping_out), tried where readings in one
+  // memory state differ (the return-point time signature at alpha, model-free evidence that the
+  // memory is not the turning points alone; a drift shows it too) and named where the term
+  // gains >= 5 % at alpha. Its evidence is that signature, not the congruency test's, so in
+  // cause.cpp it competes by gain (ctx.loops_unclosed): against a drift, the trend that gains
+  // more. Measured (session 88): the fifth generator's Bouc-Wen non-congruences, all `drift`
+  // before, 11 of 16 named (seeds 98000-98007, 98600-98607), the term gaining 51.5-77.9 %
+  // against the trend's 14.5-65.0 %; on the other 344 load records of those seeds of the five
+  // generators (clean, creep, drift, non-congruence, spikes) no cause changed but one drift's
+  // (`creep` before, wrong either way); on 120 clean load records under AR(1) and white noise
+  // none changed.
+  const Signature& apart = ctx.return_point.time;
+  std::optional<Finding> unclosed;
+  if (!rec.several_loads && rec.input_is_load && apart.available && apart.p_value < ctx.opt.alpha) {
+    unclosed = loops_without_wiping_out(ctx);
+    const double gain_p = unclosed->p_value;
+    unclosed->evidence = describe(apart) + "; " + unclosed->evidence;
+    unclosed->detected = unclosed->gain_pct >= ctx.opt.min_gain_pct && gain_p < ctx.opt.alpha;
+  }
+  if (!sig.available || rec.several_loads) {
+    if (unclosed) {
+      ctx.loops_unclosed = true;
+      return *unclosed;
+    }
     return not_tested(ctx, "minor_loop_noncongruence",
                       "needs monotone branches from the same turning value after different "
                       "histories (minor loops between the same extrema) in one load record, "
                       "which these data do not hold");
+  }
   // The extension: an output-dependent loop height, y = phi_c(Gamma[u]) with the monotone map
   // phi_c(x) = x + c x (x - 1) of the output x in units of its range (PHYSICS.md section 5,
   // "output-dependent density"): a loop's height scales with 1 + c (2 x - 1) at its level,
@@ -155,7 +308,20 @@ Finding detect_noncongruence(Context& ctx) {
     return f;
   };
   Finding by_map = family(true);
-  if (identified < kMinIdentified) return by_map;
+  auto with_unclosed = [&](Finding f) {
+    if (!unclosed) return f;
+    const bool first =
+        unclosed->detected != f.detected ? unclosed->detected : unclosed->gain_pct > f.gain_pct;
+    Finding& g = first ? *unclosed : f;
+    const Finding& other = first ? f : *unclosed;
+    // Reported for its larger gain beside a detected congruency family, it keeps that family's
+    // evidence (fifth-generator seed 70180: the moving model detected with the signature at
+    // p = 0.0036, the term gaining 66.8 % against its 6.4 % and a trend's 68.5 %).
+    ctx.loops_unclosed = first && !f.detected;
+    g.evidence += fmt::format("; the {} gains {:.2f} %", other.extended_model, other.gain_pct);
+    return g;
+  };
+  if (identified < kMinIdentified) return with_unclosed(std::move(by_map));
   Finding by_moving = family(false);
   const bool moving_first = by_moving.detected != by_map.detected
                                 ? by_moving.detected
@@ -163,7 +329,7 @@ Finding detect_noncongruence(Context& ctx) {
   Finding& f = moving_first ? by_moving : by_map;
   const Finding& other = moving_first ? by_map : by_moving;
   f.evidence += fmt::format("; the {} gains {:.2f} %", other.extended_model, other.gain_pct);
-  return f;
+  return with_unclosed(std::move(f));
 }
 
 }  // namespace scpkit::diagnosis

@@ -833,16 +833,19 @@ CongruencySignatures congruency_signatures(const Record& rec) {
   return out;
 }
 
-Signature hold_signature(const Record& rec, double sigma) {
-  const auto [umin, umax] = std::minmax_element(rec.u.begin(), rec.u.end());
-  const double utol = 1e-9 * std::max(*umax - *umin, 1e-300);
-  // The response's direction: the sign of sum(du dy) over the input steps.
+double response_direction(const Record& rec) {
   double cross = 0.0;
   for (std::size_t t = 1; t < rec.size(); ++t) {
     if (rec.seg[t] == rec.seg[t - 1])
       cross += (rec.u[t] - rec.u[t - 1]) * (rec.y[t] - rec.y[t - 1]);
   }
-  const double dir = cross >= 0.0 ? 1.0 : -1.0;
+  return cross >= 0.0 ? 1.0 : -1.0;
+}
+
+Signature hold_signature(const Record& rec, double sigma) {
+  const auto [umin, umax] = std::minmax_element(rec.u.begin(), rec.u.end());
+  const double utol = 1e-9 * std::max(*umax - *umin, 1e-300);
+  const double dir = response_direction(rec);
   std::vector<double> s, dt, m;
   for (std::size_t t = 1; t < rec.size();) {
     const bool step = rec.seg[t] == rec.seg[t - 1] && std::abs(rec.u[t] - rec.u[t - 1]) > utol;

@@ -85,4 +85,8 @@ CongruencySignatures congruency_signatures(const Record& rec);
 /// One-sided: motion during holds in the direction of the last input step.
 Signature hold_signature(const Record& rec, double sigma);
 
+/// The response's direction: +1 where it rises with the input (the sign of sum(du dy) over the
+/// input steps within segments), else -1.
+double response_direction(const Record& rec);
+
 }  // namespace scpkit::diagnosis
