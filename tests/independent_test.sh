@@ -324,6 +324,10 @@
 #   0.5) named `minor_loop_noncongruence` (25.0 % against the trend's 9.8 %): `drift`. And a
 #   fourth-generator creep (seed 98000), which that term named while its finding counted as
 #   loops modelled and held back the lag in readings of one memory state: `creep`.
+# - Session 89: two or more readings more than 5 scales off their hold-mates are spikes, each
+#   within what creep and rounding leave alone: a fifth-generator load record of six 6.4-9.3 %
+#   spikes read twice per hold (seed 98000), two at 5.8 and 5.4 and none beyond 6, `none`
+#   before: `outliers`.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -400,6 +404,7 @@ make_cases e e 1 98601 load-minor_loop_noncongruence
 make_cases b b 1 98007 load-drift
 make_cases d d 1 98000 load-creep
 make_cases c c 1 6030 load-drift
+make_cases e e 1 98000 load-outliers
 make_cases d d 1 5006 voltage-none
 make_cases d d 1 5013 voltage-none
 make_cases d d 1 4102 voltage-load_shape_coupling
@@ -637,5 +642,6 @@ expect "$work/d/load-drift-98000.csv" drift
 expect "$work/e/load-minor_loop_noncongruence-98601.csv" minor_loop_noncongruence
 expect "$work/b/load-drift-98007.csv" drift
 expect "$work/d/load-creep-98000.csv" creep
+expect "$work/e/load-outliers-98000.csv" outliers
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]
