@@ -756,12 +756,12 @@ Finding detect_outliers(Context& ctx) {
   f.evidence = fmt::format(
       "{} reading(s) stand more than {:g} robust sigmas off their neighbours (largest {:.1f}), "
       "or more than {:g} off them and {:g} off the readings at the same point of the protocol "
-      "elsewhere, or {:g} off their hold-mates, or in bursts of up to {} readings {:g} off the "
-      "readings at their points ({} such, {} of them in holds, largest {:.1f}); "
-      "without them the held-out E_RMS on the other readings goes from {:.3f} to {:.3f} % of "
-      "range (sign-flip p = {:.3f}){}",
-      count, kFlag, zmax, kCandidate, kRepro, kHold, kBurst, kAlone, confirmed, screen.in_holds,
-      screen.repro_max, f.heldout_rms_before, f.heldout_rms_after, gain_p,
+      "elsewhere, or {:g} off their hold-mates ({:g} where two or more are), or in bursts of up "
+      "to {} readings {:g} off the readings at their points ({} such, {} of them in holds, "
+      "largest {:.1f}); without them the held-out E_RMS on the other readings goes from {:.3f} "
+      "to {:.3f} % of range (sign-flip p = {:.3f}){}",
+      count, kFlag, zmax, kCandidate, kRepro, kHold, kHoldPair, kBurst, kAlone, confirmed,
+      screen.in_holds, screen.repro_max, f.heldout_rms_before, f.heldout_rms_after, gain_p,
       std::isnan(identified_gain)
           ? std::string()
           : fmt::format(", {:+.1f} % on the {} whose memory both trainings identified",
