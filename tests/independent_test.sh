@@ -328,6 +328,12 @@
 #   within what creep and rounding leave alone: a fifth-generator load record of six 6.4-9.3 %
 #   spikes read twice per hold (seed 98000), two at 5.8 and 5.4 and none beyond 6, `none`
 #   before: `outliers`.
+# - Session 90: a coupling's signature at alpha / 10 (no permutation of 9 990 explains as much)
+#   names it where its extension gains 1 % at gain_alpha: a fifth-generator coupling (seed
+#   98001, signature p < 0.001, the extension gaining 3.5 % at p = 0.018, held-out error below
+#   materiality), `none` before: `load_shape_coupling`. On either route the extension must gain
+#   1 %: a clean fourth-generator record (seed 99203, 0.002 mm noise, four loads), named so on a
+#   gain of 0.50 % at p = 0.001 before: `none`.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -405,6 +411,8 @@ make_cases b b 1 98007 load-drift
 make_cases d d 1 98000 load-creep
 make_cases c c 1 6030 load-drift
 make_cases e e 1 98000 load-outliers
+make_cases e e 1 98001 voltage-load_shape_coupling
+make_cases d d 1 99203 voltage-none
 make_cases d d 1 5006 voltage-none
 make_cases d d 1 5013 voltage-none
 make_cases d d 1 4102 voltage-load_shape_coupling
@@ -643,5 +651,7 @@ expect "$work/e/load-minor_loop_noncongruence-98601.csv" minor_loop_noncongruenc
 expect "$work/b/load-drift-98007.csv" drift
 expect "$work/d/load-creep-98000.csv" creep
 expect "$work/e/load-outliers-98000.csv" outliers
+expect "$work/e/voltage-load_shape_coupling-98001.csv" load_shape_coupling
+expect "$work/d/voltage-none-99203.csv" none
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]
