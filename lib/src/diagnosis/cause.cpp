@@ -34,9 +34,6 @@ constexpr int kMinTimePairs = 20;
 /// Maps that gain this many times what a drift sized inside the segments gains are named
 /// ahead of it (named_by_extension).
 constexpr double kMapsOverDriftWithin = 3.0;
-/// A coupling named by its signature needs its extension to gain this much (% of held-out
-/// E_RMS), as a drift named by its signature at alpha does.
-constexpr double kSignatureGainPct = 1.0;
 
 /// Whether creep gains kCreepOverLonely times what the lonely stroke's term gains. On one
 /// record driven from rest (one segment, not a load test) the gains are taken without the folds

@@ -84,6 +84,11 @@ struct Context {
 /// structure beside the baseline's gaps.
 constexpr std::size_t kMinIdentified = 10;
 
+/// What an extension must gain (% of held-out E_RMS) where its model-free signature at alpha,
+/// not its gain, names the effect: a drift (detect_drift) and a load-shape coupling
+/// (name_by_signature in cause.cpp). Clean records' extensions gained up to 0.84 % there.
+constexpr double kSignatureGainPct = 1.0;
+
 /// The scored readings whose memory their fold's training identified (Context::identified), in
 /// order: the one count of them the detectors and the report use.
 std::vector<std::size_t> identified_scored(const Context& ctx);

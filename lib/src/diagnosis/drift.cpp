@@ -447,7 +447,7 @@ Finding detect_drift(Context& ctx) {
     // held-out E_RMS of 0.109 % of range; test VoltageDriftInLoadOrderAndSpikesAnywhere).
     const bool gain_holds = rec.several_loads || f.p_value < ctx.opt.gain_alpha;
     if ((sig.p_value < ctx.opt.alpha / 10.0 && f.gain_pct > 0.0) ||
-        (sig.p_value < ctx.opt.alpha && f.gain_pct > 1.0 && gain_holds))
+        (sig.p_value < ctx.opt.alpha && f.gain_pct > kSignatureGainPct && gain_holds))
       f.detected = true;
   }
   return f;
