@@ -334,6 +334,9 @@
 #   materiality), `none` before: `load_shape_coupling`. On either route the extension must gain
 #   1 %: a clean fourth-generator record (seed 99203, 0.002 mm noise, four loads), named so on a
 #   gain of 0.50 % at p = 0.001 before: `none`.
+# - Session 91: exact data name nothing: a clean second-generator voltage record written
+#   without noise (seed 99106, `--noise-free`), every held-out reading within 8.4e-5 % of the
+#   range, named `load_shape_coupling` before on a gain of 12 % of that: `none`.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -413,6 +416,7 @@ make_cases c c 1 6030 load-drift
 make_cases e e 1 98000 load-outliers
 make_cases e e 1 98001 voltage-load_shape_coupling
 make_cases d d 1 99203 voltage-none
+make_cases b exact 1 99106 voltage-none --noise-free
 make_cases d d 1 5006 voltage-none
 make_cases d d 1 5013 voltage-none
 make_cases d d 1 4102 voltage-load_shape_coupling
@@ -653,5 +657,6 @@ expect "$work/d/load-creep-98000.csv" creep
 expect "$work/e/load-outliers-98000.csv" outliers
 expect "$work/e/voltage-load_shape_coupling-98001.csv" load_shape_coupling
 expect "$work/d/voltage-none-99203.csv" none
+expect "$work/exact/voltage-none-99106.csv" none
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]

@@ -240,8 +240,9 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   // by the element; two fourth-generator creeps, whose element restarts with each load,
   // 18.0-22.3 % against 40.0-49.7 % (seeds 9408 and 9412).
   const bool creep_named = creep_may_be_lonely_stroke(ctx, d);
+  // Not on exact data (name_cause): nothing is left there for the term to gain on.
   if ((d.cause == "none" || d.cause == "unexplained" || creep_named) &&
-      rec.fold_kind == "load segments") {
+      rec.fold_kind == "load segments" && !(d.max_pct_range < diagnosis::kExactPct)) {
     for (Finding& f : d.findings) {
       if (f.effect != "lonely_stroke") continue;
       if (std::optional<Finding> second = lonely_within_segments(
