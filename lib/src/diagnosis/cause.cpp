@@ -13,6 +13,7 @@ namespace scpkit::diagnosis {
 namespace {
 
 constexpr double kMaterialPct = 1.0;  ///< % of range: the least residual error called structure
+constexpr double kExactPct = 0.01;    ///< % of range: every held-out error within it (exact_fit)
 /// The least share of the held-out readings that must be identified for `unexplained`.
 constexpr std::size_t kIdentifiedShareDivisor = 4;  // a quarter
 /// Outliers whose removal gains little yield to another detected extension gaining this many
@@ -582,6 +583,8 @@ void creep_ahead_of(const Context& ctx, Diagnosis& d) {
 
 }  // namespace
 
+bool exact_fit(const Diagnosis& d) { return d.max_pct_range < kExactPct; }
+
 void name_cause(Context& ctx, Diagnosis& d) {
   // Exact data (a simulation written without noise): where the baseline reproduces every
   // held-out reading within kExactPct, the extensions' gains and the signatures' p-values are
@@ -591,7 +594,7 @@ void name_cause(Context& ctx, Diagnosis& d) {
   // 12 % at p = 0.002; of 480 noise-free records of unseen seeds 99100-99107 nine had every
   // held-out reading within 0.01 %, all clean; every effect's record named right there had a
   // largest held-out error of 0.14 % or more).
-  if (d.max_pct_range < kExactPct) {
+  if (exact_fit(d)) {
     for (Finding& f : d.findings) {
       if (!f.detected) continue;
       f.detected = false;

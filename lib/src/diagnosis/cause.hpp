@@ -11,6 +11,11 @@ struct Context;
 /// when it gains this many times as much on held-out data.
 inline constexpr double kCreepOverLonely = 1.25;
 
+/// Whether the baseline reproduces every held-out reading within 0.01 % of the range (1 um on a
+/// 10 mm stroke, a hundredth of the least error called structure): exact data, on which
+/// nothing is named (name_cause) and the lonely stroke's second look is not taken.
+bool exact_fit(const Diagnosis& d);
+
 /// Sets d.cause and d.cause_note from d.findings (every detector run) and the signatures in
 /// ctx: effects read off model-free signatures first (outliers, creep seen in holds,
 /// non-congruence), then the lonely stroke and the rest by their held-out gains, compared like

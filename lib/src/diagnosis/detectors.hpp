@@ -89,11 +89,6 @@ constexpr std::size_t kMinIdentified = 10;
 /// (name_by_signature in cause.cpp). Clean records' extensions gained up to 0.84 % there.
 constexpr double kSignatureGainPct = 1.0;
 
-/// % of range: a baseline that reproduces every held-out reading within this leaves nothing an
-/// effect could be named on (name_cause, and the lonely stroke's second look in diagnose.cpp):
-/// 1 um on a 10 mm stroke, a hundredth of the least error called structure.
-constexpr double kExactPct = 0.01;
-
 /// The scored readings whose memory their fold's training identified (Context::identified), in
 /// order: the one count of them the detectors and the report use.
 std::vector<std::size_t> identified_scored(const Context& ctx);

@@ -242,7 +242,7 @@ Diagnosis diagnose(const DiagnoseData& data, const DiagnoseOptions& opt) {
   const bool creep_named = creep_may_be_lonely_stroke(ctx, d);
   // Not on exact data (name_cause): nothing is left there for the term to gain on.
   if ((d.cause == "none" || d.cause == "unexplained" || creep_named) &&
-      rec.fold_kind == "load segments" && !(d.max_pct_range < diagnosis::kExactPct)) {
+      rec.fold_kind == "load segments" && !diagnosis::exact_fit(d)) {
     for (Finding& f : d.findings) {
       if (f.effect != "lonely_stroke") continue;
       if (std::optional<Finding> second = lonely_within_segments(
