@@ -328,8 +328,8 @@
 #   within what creep and rounding leave alone: a fifth-generator load record of six 6.4-9.3 %
 #   spikes read twice per hold (seed 98000), two at 5.8 and 5.4 and none beyond 6, `none`
 #   before: `outliers`.
-# - Session 90: a coupling's signature at alpha / 10 (no permutation of 9 990 explains as much)
-#   names it where its extension gains 1 % at gain_alpha: a fifth-generator coupling (seed
+# - Session 90: a coupling's signature at alpha / 10 (at most 8 permutations of 9 990 explain as
+#   much) names it where its extension gains 1 % at gain_alpha: a fifth-generator coupling (seed
 #   98001, signature p < 0.001, the extension gaining 3.5 % at p = 0.018, held-out error below
 #   materiality), `none` before: `load_shape_coupling`. On either route the extension must gain
 #   1 %: a clean fourth-generator record (seed 99203, 0.002 mm noise, four loads), named so on a
@@ -337,6 +337,13 @@
 # - Session 91: exact data name nothing: a clean second-generator voltage record written
 #   without noise (seed 99106, `--noise-free`), every held-out reading within 8.4e-5 % of the
 #   range, named `load_shape_coupling` before on a gain of 12 % of that: `none`.
+# - Session 92: the evidence shows the signature's p-value the cause is named by. At the
+#   permutation floor (p = 0.001) the coupling's signature is taken again on 9 990
+#   permutations, and only that p decides the route at alpha / 10; the evidence showed the
+#   first one, so two records shown at p = 0.001, their extensions gaining 3-5 % at p < 0.05,
+#   were named differently with nothing shown to tell them apart (fifth generator, seeds 98001
+#   and 99100: refined p 0.0001 and 0.001001). Each must show the refined p, on the side of
+#   alpha / 10 its naming by the signature alone implies.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -415,6 +422,7 @@ make_cases d d 1 98000 load-creep
 make_cases c c 1 6030 load-drift
 make_cases e e 1 98000 load-outliers
 make_cases e e 1 98001 voltage-load_shape_coupling
+make_cases e e 1 99100 voltage-load_shape_coupling
 make_cases d d 1 99203 voltage-none
 make_cases b exact 1 99106 voltage-none --noise-free
 make_cases d d 1 5006 voltage-none
@@ -514,6 +522,24 @@ expect_not() {  # expect_not FILE CAUSE
   else
     fail=$((fail + 1))
     echo "FAIL: $(basename "$1") ($(grep '^# gen' "$1")) named $cause"
+  fi
+}
+expect_shown_p() {  # expect_shown_p FILE: the coupling's evidence shows the p it is named by
+  local verdict
+  verdict=$("$bin" diagnose "$1" --json 2>/dev/null | python3 -c '
+import json, re, sys
+f = [x for x in json.load(sys.stdin)["findings"] if x["effect"] == "load_shape_coupling"][0]
+m = re.search(r"block-permutation p = ([0-9.e-]+) over 9990 permutations", f["evidence"])
+if not m: print("no refined p in: " + f["evidence"]); sys.exit()
+by_signature = "named by this signature alone" in f["evidence"]
+print("ok" if (float(m.group(1)) <= 0.001) == by_signature else "shown p " + m.group(1) +
+      (" named" if by_signature else " not named") + " by the signature")
+' 2>&1 || echo error)
+  if [ "$verdict" = ok ]; then
+    pass=$((pass + 1))
+  else
+    fail=$((fail + 1))
+    echo "FAIL: $(basename "$1"): $verdict"
   fi
 }
 for f in "$work"/clean/*-none-*.csv; do expect "$f" none; done
@@ -656,6 +682,8 @@ expect "$work/b/load-drift-98007.csv" drift
 expect "$work/d/load-creep-98000.csv" creep
 expect "$work/e/load-outliers-98000.csv" outliers
 expect "$work/e/voltage-load_shape_coupling-98001.csv" load_shape_coupling
+expect_shown_p "$work/e/voltage-load_shape_coupling-98001.csv"
+expect_shown_p "$work/e/voltage-load_shape_coupling-99100.csv"
 expect "$work/d/voltage-none-99203.csv" none
 expect "$work/exact/voltage-none-99106.csv" none
 echo "$pass passed, $fail failed"

@@ -492,8 +492,9 @@ void name_by_signature(Context& ctx, Diagnosis& d, const Signs& signs, bool mate
   // of 1.9-5.0 % at p <= 0.019 on six records named `none`; over 530 voltage records of the
   // five generators, the clean ones among them, no record of another truth but one creep had
   // a signature at p <= 0.01 and a positive gain at gain_alpha without being named otherwise).
-  // Since session 90 also where no permutation of the residual blocks explains as much as the
-  // shape change does (the signature at alpha / 10, the permutation test's floor), material or
+  // Since session 90 also where hardly a permutation of the residual blocks explains as much as
+  // the shape change does (the signature at alpha / 10: the first 999 permutations' floor, then
+  // at most 8 of the 9 990 it is taken again on, context.cpp feature_finding), material or
   // not, with the gain at gain_alpha, as the drift's signature at alpha; and on either route
   // the extension must gain kSignatureGainPct (measured, session 90: the fifth generator's
   // couplings, signature p < 0.001 and gains of 3.2-4.6 % at p = 0.018-0.034, held-out errors
