@@ -502,27 +502,29 @@ make_cases e e 1 50005 load-outliers
 make_cases d d 1 50000 load-creep
 pass=0
 fail=0
-expect() {  # expect FILE CAUSE
-  local cause
-  cause=$("$bin" diagnose "$1" --json 2>/dev/null |
-    python3 -c 'import json, sys; print(json.load(sys.stdin)["cause"])' 2>/dev/null || echo error)
-  if [ "$cause" = "$2" ]; then
+check() {  # check HOLDS MESSAGE: counts a pass where HOLDS is 1, else a failure with MESSAGE
+  if [ "$1" = 1 ]; then
     pass=$((pass + 1))
   else
     fail=$((fail + 1))
-    echo "FAIL: $(basename "$1") ($(grep '^# gen' "$1")) named $cause, not $2"
+    echo "FAIL: $2"
   fi
+}
+cause_of() {  # cause_of FILE: the named cause, or `error`
+  "$bin" diagnose "$1" --json 2>/dev/null |
+    python3 -c 'import json, sys; print(json.load(sys.stdin)["cause"])' 2>/dev/null || echo error
+}
+expect() {  # expect FILE CAUSE
+  local cause
+  cause=$(cause_of "$1")
+  check "$([ "$cause" = "$2" ] && echo 1)" \
+    "$(basename "$1") ($(grep '^# gen' "$1")) named $cause, not $2"
 }
 expect_not() {  # expect_not FILE CAUSE
   local cause
-  cause=$("$bin" diagnose "$1" --json 2>/dev/null |
-    python3 -c 'import json, sys; print(json.load(sys.stdin)["cause"])' 2>/dev/null || echo error)
-  if [ "$cause" != "$2" ] && [ "$cause" != error ]; then
-    pass=$((pass + 1))
-  else
-    fail=$((fail + 1))
-    echo "FAIL: $(basename "$1") ($(grep '^# gen' "$1")) named $cause"
-  fi
+  cause=$(cause_of "$1")
+  check "$([ "$cause" != "$2" ] && [ "$cause" != error ] && echo 1)" \
+    "$(basename "$1") ($(grep '^# gen' "$1")) named $cause"
 }
 expect_shown_p() {  # expect_shown_p FILE: the coupling's evidence shows the p it is named by
   local verdict
@@ -535,12 +537,7 @@ by_signature = "named by this signature alone" in f["evidence"]
 print("ok" if (float(m.group(1)) <= 0.001) == by_signature else "shown p " + m.group(1) +
       (" named" if by_signature else " not named") + " by the signature")
 ' 2>&1 || echo error)
-  if [ "$verdict" = ok ]; then
-    pass=$((pass + 1))
-  else
-    fail=$((fail + 1))
-    echo "FAIL: $(basename "$1"): $verdict"
-  fi
+  check "$([ "$verdict" = ok ] && echo 1)" "$(basename "$1"): $verdict"
 }
 for f in "$work"/clean/*-none-*.csv; do expect "$f" none; done
 expect "$work/fresh/load-outliers-603.csv" outliers

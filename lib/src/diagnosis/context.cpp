@@ -275,17 +275,19 @@ Finding feature_finding(Context& ctx, const std::string& effect, const std::stri
   const std::size_t block = std::max<std::size_t>(4, ctx.scored.size() / 24);
   const double p_signature =
       block_permutation_p(rs, Xs, f.score, block, ctx.opt.permutations, ctx.rng);
-  const bool at_floor = p_signature * (ctx.opt.permutations + 1) < 1.5;
+  // At the floor of its permutations the signature's p-value is taken again on ten times as
+  // many, and that is the one the cause is named by (name_by_signature) and the evidence shows.
+  const bool refined = signature && p_signature * (ctx.opt.permutations + 1) < 1.5;
+  const int refined_permutations = 10 * ctx.opt.permutations;
   if (signature) {
     signature->available = true;
     signature->what = what;
     signature->estimate = f.score;
     signature->units = static_cast<int>(rs.size() / static_cast<Eigen::Index>(block));
     signature->p_value = p_signature;
-    if (at_floor) {
+    if (refined) {
       std::mt19937_64 own(ctx.opt.seed + 29);
-      signature->p_value =
-          block_permutation_p(rs, Xs, f.score, block, 10 * ctx.opt.permutations, own);
+      signature->p_value = block_permutation_p(rs, Xs, f.score, block, refined_permutations, own);
     }
   }
   // The extension, fitted on each fold's training rows.
@@ -330,13 +332,9 @@ Finding feature_finding(Context& ctx, const std::string& effect, const std::stri
   record(f, ctx, s, std::max(p_signature, s.p_value));
   f.detected = p_signature < ctx.opt.alpha && s.p_value < ctx.opt.gain_alpha &&
                f.gain_pct >= ctx.opt.min_gain_pct;
-  // At the permutation test's floor the signature's p-value is taken again on ten times the
-  // permutations, and that is the one the cause is named by (name_by_signature): the evidence
-  // shows it, so that two records shown at p = 0.001 are not named differently unexplained.
-  const bool refined = signature && at_floor;
-  const std::string p_shown = refined ? fmt::format("{:.4g} over {} permutations",
-                                                    signature->p_value, 10 * ctx.opt.permutations)
-                                      : fmt::format("{:.3f}", p_signature);
+  const std::string p_shown =
+      refined ? fmt::format("{:.4g} over {} permutations", signature->p_value, refined_permutations)
+              : fmt::format("{:.3f}", p_signature);
   f.evidence = fmt::format(
       "{} explains {:.0f} % of the held-out residual variance (block-permutation p = {}); "
       "the extension changes held-out E_RMS from {:.3f} to {:.3f} % of range (sign-flip p = "
