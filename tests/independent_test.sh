@@ -344,6 +344,10 @@
 #   were named differently with nothing shown to tell them apart (fifth generator, seeds 98001
 #   and 99100: refined p 0.0001 and 0.001001). Each must show the refined p, on the side of
 #   alpha / 10 its naming by the signature alone implies.
+# - Session 93: a reading inside its neighbours' interval on a monotone branch is flagged off
+#   its neighbours only beyond 10 robust sigmas: a clean fifth-generator FORC record (seed
+#   99304), one reading 9.1 off its neighbours where the baseline missed the onset of the
+#   branch's steepest step, was named `outliers`.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -438,6 +442,7 @@ make_cases c c 1 6143 voltage-none
 make_cases d d 1 4102 load-drift
 make_cases d d 1 4606 load-drift
 make_cases c c 1 2002 voltage-lonely_stroke
+make_cases e e 1 99304 load-none
 make_cases d d 1 4700 voltage-lonely_stroke
 make_cases a ar 1 4803 voltage-none --ar-noise 0.7
 make_cases d d 1 5002 load-outliers
@@ -638,6 +643,7 @@ expect "$work/c/load-outliers-8200.csv" outliers
 expect "$work/e/load-drift-8217.csv" drift
 expect "$work/c/voltage-creep-8403.csv" creep
 expect "$work/c/voltage-lonely_stroke-9402.csv" lonely_stroke
+expect "$work/e/load-none-99304.csv" none
 expect "$work/d/voltage-creep-9408.csv" creep
 expect "$work/d/voltage-creep-9412.csv" creep
 expect "$work/d/voltage-offset_nonlinearity-9402.csv" offset_nonlinearity
