@@ -348,10 +348,10 @@
 #   its neighbours only beyond 10 robust sigmas: a clean fifth-generator FORC record (seed
 #   99304), one reading 9.1 off its neighbours where the baseline missed the onset of the
 #   branch's steepest step, was named `outliers`.
-# - Session 95: a coupling named by its signature alone needs three scored load segments: a
+# - Session 95: a coupling named by its signature alone needs three held-out load segments: a
 #   clean fourth-generator voltage record at four loads in two folds (seed 99305, 0.002 mm
 #   noise), named `load_shape_coupling` on a gain of 3.8 % at p = 0.001 over the cycles of its
-#   two scored segments: `none`.
+#   two held-out segments: `none`.
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1

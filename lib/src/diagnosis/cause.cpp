@@ -36,19 +36,19 @@ constexpr int kMinTimePairs = 20;
 /// ahead of it (named_by_extension).
 constexpr double kMapsOverDriftWithin = 3.0;
 /// Load segments with held-out readings that a coupling named by its signature alone needs: a
-/// change of loop shape with load is a property of each segment, so two scored segments are two
-/// units of evidence, however many cycles they hold (measured, session 95: a clean
+/// change of loop shape with load is a property of each segment, so two held-out segments are
+/// two units of evidence, however many cycles they hold (measured, session 95: a clean
 /// fourth-generator voltage record of unseen seed 99305, four loads in two folds, the
-/// extension gaining 3.8 % at p = 0.001 over the cycles of its two scored segments).
+/// extension gaining 3.8 % at p = 0.001 over the cycles of its two held-out segments).
 constexpr std::size_t kCoupledSegments = 3;
 
-/// How many load segments hold readings that some fold scores.
-std::size_t scored_segments(const Record& rec) {
-  std::vector<char> scored(rec.seg_first.size(), 0);
+/// How many load segments hold readings that some fold holds out (the end loads always train).
+std::size_t held_out_segments(const Record& rec) {
+  std::vector<char> held_out(rec.seg_first.size(), 0);
   for (std::size_t t = 0; t < rec.size(); ++t) {
-    if (rec.fold[t] >= 0) scored[static_cast<std::size_t>(rec.seg[t])] = 1;
+    if (rec.fold[t] >= 0) held_out[static_cast<std::size_t>(rec.seg[t])] = 1;
   }
-  return static_cast<std::size_t>(std::count(scored.begin(), scored.end(), 1));
+  return static_cast<std::size_t>(std::count(held_out.begin(), held_out.end(), 1));
 }
 
 /// Whether creep gains kCreepOverLonely times what the lonely stroke's term gains. On one
@@ -523,7 +523,7 @@ void name_by_signature(Context& ctx, Diagnosis& d, const Signs& signs, bool mate
     const bool at_level = ctx.coupling.p_value < level && f.p_value < opt.alpha;
     const bool at_floor = ctx.coupling.p_value <= opt.alpha / 10.0 && f.p_value < opt.gain_alpha;
     coupled = ctx.coupling.available && f.gain_pct >= kSignatureGainPct && (at_level || at_floor) &&
-              scored_segments(rec) >= kCoupledSegments;
+              held_out_segments(rec) >= kCoupledSegments;
   }
   if (creep_signature && !(lonely_offset && rp.p_value < creep_p)) {
     name_by_signature("creep", "its extension gains too little against the noise to show");
