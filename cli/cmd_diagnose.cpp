@@ -8,6 +8,7 @@
 #include "common.hpp"
 #include "scpkit/diagnosis/diagnose.hpp"
 #include "scpkit/diagnosis/ply_mapping_diagnosis.hpp"
+#include "scpkit/diagnosis/specimen_change.hpp"
 #include "scpkit/io/atomic_file.hpp"
 #include "scpkit/mechanics/material.hpp"
 
@@ -16,7 +17,7 @@ namespace {
 
 constexpr const char* kUsage =
     "scpkit diagnose DATA.csv [--json] [--residuals OUT.csv] [--seed N] [--threads N] "
-    "[--coil-d MM --coil-D MM --coil-n N --legs K]";
+    "[--coil-d MM --coil-D MM --coil-n N --legs K] [--reference REFERENCE.csv]";
 constexpr const char* kAbout =
     "Fits the baseline (a Preisach model) with held-out validation over whole cycles or the\n"
     "segment column, estimates the noise floor from the data, tests one signature per named\n"
@@ -30,6 +31,11 @@ constexpr const char* kAbout =
     "ply-mapping diagnosis instead: the SCP gain predicted from the material card and the coil\n"
     "(metadata coil_d_mm, coil_D_mm, coil_n, legs, or the flags) against the measured one, and\n"
     "the causes spring_index, legs, active_coils, input_scale scored on held-out cycles.\n"
+    "With --reference, what changed between two tests of one kind (e.g. a fibre dry and after\n"
+    "moisture): the reference's Preisach model predicts DATA.csv, and the changes offset,\n"
+    "range, input_shift (nested) and shape (DATA.csv's own model) are scored on contiguous\n"
+    "held-out blocks of DATA.csv; the named change is the last one that gains >= 5 % at\n"
+    "sign-flip p < 0.05 (docs/diagnose.md, \"What changed between two tests\").\n"
     "--json prints the SPEC's object. --residuals writes, beside the file's own columns, where\n"
     "the model fails: each reading's held-out fold, the baseline's held-out prediction and\n"
     "residual, and the named cause's extended model (in the response column's units; blank\n"
@@ -136,6 +142,95 @@ int run_ply_mapping(const Measurement& m, const po::variables_map& vm) {
   return kOk;
 }
 
+// What changed between a reference test and DATA.csv (the same input and response quantity).
+int run_specimen_change(const Measurement& m, const po::variables_map& vm) {
+  const Measurement r = Measurement::read(vm["reference"].as<std::string>());
+  for (const Measurement* x : {&m, &r}) {
+    if (augmented_drive(*x, vm["input"].as<std::string>()))
+      throw InputError(x->source(), 0, 0,
+                       "a comparison of tests at several constant loads is not built: compare "
+                       "load tests, or tests at one load");
+  }
+  std::string note;
+  const Signal in = choose_input(m, vm["input"].as<std::string>(), note);
+  if (!note.empty()) std::cerr << "scpkit diagnose: note: " << note << "\n";
+  const Signal ref_in = choose_input(r, in.name, note);
+  const Signal out = select_response(m);
+  const Signal ref_out = select_response(r);
+  if (ref_out.name != out.name)
+    throw InputError(r.source(), 0, 0,
+                     fmt::format("the reference's response is {} ({}), the data's {} ({}): "
+                                 "compare tests of one kind (give length_mm to both for strain)",
+                                 ref_out.name, ref_out.column, out.name, out.column));
+  SpecimenChangeOptions o;
+  o.seed = static_cast<std::uint64_t>(std::max(0LL, vm["seed"].as<long long>()));
+  const SpecimenChange d = [&] {
+    try {
+      return diagnose_specimen_change(ref_in.values, ref_out.values, in.values, out.values, o);
+    } catch (const IdentificationError& e) {
+      const std::string what = e.what();
+      const bool reference = what.rfind("the reference: ", 0) == 0;
+      rethrow_at_column(reference ? r : m, reference ? ref_out.column : out.column,
+                        "cannot compare: " + what);
+    }
+  }();
+  const double f = display_scale(out.name);
+  const std::string unit = display_unit(out.name), in_unit = display_unit(in.name);
+  if (vm.count("json")) {
+    nlohmann::json findings = nlohmann::json::array();
+    for (std::size_t i = 1; i < d.candidates.size(); ++i) {
+      const SpecimenChangeCandidate& c = d.candidates[i];
+      findings.push_back({{"effect", c.change},
+                          {"detected", c.accepted},
+                          {"score", c.gain_pct},
+                          {"p_value", c.p_value},
+                          {"evidence", c.evidence},
+                          {"extended_model", c.model},
+                          {"heldout_rms_before", c.heldout_rms_before_pct},
+                          {"heldout_rms_after", c.heldout_rms_pct},
+                          {"gain_pct", c.gain_pct},
+                          {"g", c.g},
+                          {"c", c.c * f},
+                          {"d", c.d}});
+    }
+    const SpecimenChangeCandidate& base = d.candidates.front();
+    print_json({{"input", in.column},
+                {"mode", "specimen_change"},
+                {"reference", r.source()},
+                {"baseline",
+                 {{"model", d.reference_model},
+                  {"heldout_by", "contiguous blocks"},
+                  {"heldout_folds", d.blocks},
+                  {"reference_rms_pct_range", d.reference_rms_pct},
+                  {"rms_pct_range", base.heldout_rms_pct},
+                  {"max_pct_range", base.heldout_max_pct}}},
+                {"noise_floor_pct_range", d.noise_floor_pct},
+                {"findings", findings},
+                {"cause", d.change}});
+    return kOk;
+  }
+  std::cout << fmt::format(
+      "{} against the reference {}: input {}, response {} ({} held-out blocks of {} rows)\n",
+      m.source(), r.source(), in.column, out.column, d.blocks, m.rows());
+  std::cout << fmt::format(
+      "  reference model: {} (in-sample E_RMS {:.3f} % of its range); noise floor of {} {:.3f} % "
+      "of its range\n",
+      d.reference_model, d.reference_rms_pct, m.source(), d.noise_floor_pct);
+  for (const SpecimenChangeCandidate& c : d.candidates) {
+    std::string fitted;  // the parameters a chain step fitted, in display units
+    if (c.change == "offset") fitted = fmt::format(" (c = {:.4g} {})", c.c * f, unit);
+    if (c.change == "range")
+      fitted = fmt::format(" (g = {:.4g}, c = {:.4g} {})", c.g, c.c * f, unit);
+    if (c.change == "input_shift")
+      fitted = fmt::format(" (d = {:.4g} {}, g = {:.4g}, c = {:.4g} {})", c.d, in_unit, c.g,
+                           c.c * f, unit);
+    std::cout << fmt::format("  {:<12} held-out E_RMS {:7.3f} %, E_max {:7.3f} % of range{}: {}\n",
+                             c.change, c.heldout_rms_pct, c.heldout_max_pct, fitted, c.evidence);
+  }
+  std::cout << "  change: " << d.change << "\n";
+  return kOk;
+}
+
 // The file's own columns and, per reading, where the model fails: the fold that held it out,
 // whether its training identified its memory, the baseline's held-out prediction and residual,
 // the named cause's extended model and its residual (in the response column's units; blank
@@ -196,7 +291,9 @@ int run_diagnose(const std::vector<std::string>& args) {
       "coil-D", po::value<double>(), "ply mapping: SCP MEAN coil diameter D, mm")(
       "coil-n", po::value<double>(), "ply mapping: SCP coils n (whole actuator)")(
       "legs", po::value<int>(), "ply mapping: SCP legs (1, or 2 double-backed)")(
-      "material", po::value<std::string>(), "ply mapping: material card id");
+      "material", po::value<std::string>(), "ply mapping: material card id")(
+      "reference", po::value<std::string>(),
+      "a test of the same kind to compare with: what changed from it to DATA");
   add_threads_option(opt, "worker threads (the same diagnosis for any count)");
   po::variables_map vm;
   if (!parse_command_line(args, kUsage, kAbout, opt, {"DATA"}, vm)) return kOk;
@@ -205,6 +302,11 @@ int run_diagnose(const std::vector<std::string>& args) {
     if (vm.count("residuals"))
       throw UsageError("--residuals is for a test's diagnosis, not a paired thread/SCP file's");
     return run_ply_mapping(m, vm);
+  }
+  if (vm.count("reference")) {
+    if (vm.count("residuals"))
+      throw UsageError("--residuals is for a test's diagnosis, not a comparison of two tests");
+    return run_specimen_change(m, vm);
   }
   const MeasurementColumn* drive = augmented_drive(m, vm["input"].as<std::string>());
   std::string note;

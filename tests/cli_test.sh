@@ -268,5 +268,22 @@ check "diagnose pair file: legs override changes the verdict" 0 '"cause": "legs"
 check "diagnose pair file: report" 0 "SCP gain: predicted 13.59" -- "$bin" diagnose "$ex/pair-4ply.csv"
 check "diagnose pair file: half a coil is a usage error" 2 "give all of --coil-d" -- "$bin" diagnose "$ex/pair-4ply.csv" --coil-d 0.3
 
+# Two tests compared (--reference): the same rig specimen on another seed names nothing; the
+# same record moved by 0.2 mm (0.2 % strain on 100 mm) names the offset and sizes it.
+printf 'specimen = "thread"\nseed = 12\n' >"$work/again.toml"
+"$bin" simulate "$work/again.toml" -o "$work/again.csv" >/dev/null
+printf 'specimen = "thread"\nseed = 13\n' >"$work/ref.toml"
+"$bin" simulate "$work/ref.toml" -o "$work/ref.csv" >/dev/null
+check "diagnose --reference: the same specimen again names none" 0 '"cause": "none"' -- "$bin" diagnose "$work/again.csv" --reference "$work/ref.csv" --json
+awk -F, -v OFS=, '/^#/ || /^time/ { print; next } { $4 = $4 + 0.2; print }' "$work/again.csv" >"$work/moved.csv"
+check "diagnose --reference: a moved record names the offset" 0 '"cause": "offset"' -- "$bin" diagnose "$work/moved.csv" --reference "$work/ref.csv" --json
+check "diagnose --reference: the report sizes it" 0 "offset .*c = 0\.(19|20)[0-9]* strain-%.*accepted" -- "$bin" diagnose "$work/moved.csv" --reference "$work/ref.csv"
+check "diagnose --reference with --residuals is a usage error" 2 "not a comparison of two tests" -- "$bin" diagnose "$work/moved.csv" --reference "$work/ref.csv" --residuals "$work/x.csv"
+check "diagnose --reference of another input names the reference" 3 "voltage-8loads.csv" -- "$bin" diagnose "$work/moved.csv" --reference "$src/examples/data/voltage-8loads.csv"
+check "diagnose --reference: tests at several loads are not compared" 3 "several constant loads is not built" -- "$bin" diagnose "$src/examples/data/voltage-8loads.csv" --reference "$src/examples/data/voltage-lonely.csv"
+check "diagnose --reference to a missing file names it" 3 "no/such/ref.csv" -- "$bin" diagnose "$work/moved.csv" --reference "$work/no/such/ref.csv"
+head -n 14 "$work/ref.csv" >"$work/short-ref.csv"
+check "diagnose --reference too short to identify names the reference" 3 "short-ref.csv.*cannot compare: the reference" -- "$bin" diagnose "$work/moved.csv" --reference "$work/short-ref.csv"
+
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ]

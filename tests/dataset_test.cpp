@@ -4,8 +4,10 @@
 // 3.8 % max of range there; the defaults must beat it. Skipped when the folder is absent.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <set>
 
+#include "scpkit/diagnosis/specimen_change.hpp"
 #include "scpkit/hysteresis/operator.hpp"
 #include "scpkit/identification/preisach_fit.hpp"
 #include "scpkit/io/measurement.hpp"
@@ -77,6 +79,36 @@ TEST(Datasets, SmaReversalCurvesHeldOutBeatTheSeedsRecipe) {
     ASSERT_LE(u[t], fit.input_max);
   }
   EXPECT_EQ(reached, static_cast<int>(inv.size()));
+}
+
+// The precursor fibre dry and after 1 and 4 days of moisture (one heating/cooling loop each):
+// compared with the dry test, the moist ones change (water makes the fibre contract more), the
+// range factor grows with the days, and it agrees with the ratio of the files' own contraction
+// ranges, computed here from the readings alone. The dry test against itself names nothing.
+TEST(Datasets, MoistFibreAgainstDryNamesAGrowingStroke) {
+  const auto dir = testing::shared_dir();
+  if (dir.empty()) GTEST_SKIP() << "../shared/datasets not found: skipping the real-data check";
+  auto read = [&](const char* name) {
+    const Measurement m = Measurement::read(dir / "datasets" / name);
+    return std::pair{select_input(m).values, select_response(m).values};
+  };
+  const auto [ud, yd] = read("tcp-precursor-fibre-dry.csv");
+  const auto span = [](const std::vector<double>& y) {
+    return *std::max_element(y.begin(), y.end()) - *std::min_element(y.begin(), y.end());
+  };
+  EXPECT_EQ(diagnose_specimen_change(ud, yd, ud, yd).change, "none");
+  double last_g = 1.0;
+  for (const char* name :
+       {"tcp-precursor-fibre-moist-1d.csv", "tcp-precursor-fibre-moist-4d.csv"}) {
+    const auto [u, y] = read(name);
+    const SpecimenChange d = diagnose_specimen_change(ud, yd, u, y);
+    EXPECT_NE(d.change, "none") << name;
+    EXPECT_NE(d.change, "offset") << name;
+    const double g = d.candidates[2].g, ratio = span(y) / span(yd);
+    EXPECT_GT(g, 1.5 * last_g) << name;
+    EXPECT_NEAR(g, ratio, 0.2 * ratio) << name;
+    last_g = g;
+  }
 }
 
 }  // namespace
