@@ -12,16 +12,6 @@
 
 namespace scpkit::diagnosis {
 
-// Squared error of a prediction on the training rows (how extensions choose their parameters).
-double training_sse(const std::vector<double>& y, const std::vector<double>& p,
-                    const std::vector<char>& train) {
-  double ss = 0.0;
-  for (std::size_t t = 0; t < y.size(); ++t) {
-    if (train[t]) ss += (y[t] - p[t]) * (y[t] - p[t]);
-  }
-  return ss;
-}
-
 // A model-free signature's verdict in words.
 std::string describe(const Signature& s) {
   return fmt::format("{} differ by {:.3g} (z = {:.1f}, p = {:.2g}, {} comparisons)", s.what,

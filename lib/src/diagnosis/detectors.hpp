@@ -12,6 +12,7 @@
 #include "scpkit/diagnosis/diagnose.hpp"
 #include "scpkit/error.hpp"
 #include "signatures.hpp"
+#include "stats.hpp"
 
 namespace scpkit::diagnosis {
 
@@ -157,10 +158,6 @@ std::vector<double> fit_with_regressor(const Context& ctx, const std::vector<cha
                                        const std::function<double(std::size_t)>& g, double& beta);
 
 Finding not_tested(const Context& ctx, const std::string& effect, const std::string& why);
-
-/// Squared error of a prediction on the training rows (how extensions choose their parameters).
-double training_sse(const std::vector<double>& y, const std::vector<double>& p,
-                    const std::vector<char>& train);
 
 /// A model-free signature's verdict in words.
 std::string describe(const Signature& s);

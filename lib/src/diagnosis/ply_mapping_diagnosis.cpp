@@ -12,20 +12,8 @@
 #include "stats.hpp"
 
 namespace scpkit {
-namespace {
 
-// Least squares y = g x + c on the rows where use != 0; fixed_gain > 0 fixes g.
-std::pair<double, double> line(const std::vector<double>& x, const std::vector<double>& y,
-                               const std::vector<char>& use, double fixed_gain) {
-  diagnosis::LineSums sums;
-  for (std::size_t t = 0; t < x.size(); ++t) {
-    if (use[t]) sums.add(x[t], y[t]);
-  }
-  const double g = fixed_gain > 0.0 ? fixed_gain : sums.slope();
-  return {g, sums.intercept(g)};
-}
-
-}  // namespace
+using diagnosis::masked_line;
 
 PlyMappingDiagnosis diagnose_ply_mapping(const PlyMappingData& d, const Material& material,
                                          const PlyMappingOptions& opt) {
@@ -78,7 +66,8 @@ PlyMappingDiagnosis diagnose_ply_mapping(const PlyMappingData& d, const Material
   };
   auto through_thread = [&](double fixed_gain) -> Predict {
     return [&, fixed_gain](const std::vector<char>& train) {
-      const auto [g, c] = line(d.thread_strain, d.scp_strain, train, fixed_gain);
+      const auto [g, c] = masked_line(d.thread_strain, d.scp_strain, train,
+                                      fixed_gain > 0.0 ? std::optional(fixed_gain) : std::nullopt);
       std::vector<double> p(n);
       for (std::size_t t = 0; t < n; ++t) p[t] = g * d.thread_strain[t] + c;
       return p;
@@ -144,7 +133,7 @@ PlyMappingDiagnosis diagnose_ply_mapping(const PlyMappingData& d, const Material
         PreisachState st = PreisachState::negative_saturation(fit.model.grid());
         const Eigen::VectorXd gam = fit.model.simulate(st, u);
         const std::vector<double> x(gam.data(), gam.data() + gam.size());
-        const auto [g, c] = line(x, d.scp_strain, train, 0.0);
+        const auto [g, c] = masked_line(x, d.scp_strain, train);
         std::vector<double> p(n);
         double ss = 0.0;
         for (std::size_t t = 0; t < n; ++t) {

@@ -14,26 +14,6 @@
 namespace scpkit {
 namespace {
 
-// Least squares y = g x + c on the rows where use != 0; with fixed_g, g is 1 and only c fits.
-std::pair<double, double> affine(const std::vector<double>& x, std::span<const double> y,
-                                 const std::vector<char>& use, bool fixed_g) {
-  diagnosis::LineSums sums;
-  for (std::size_t t = 0; t < x.size(); ++t) {
-    if (use[t]) sums.add(x[t], y[t]);
-  }
-  const double g = fixed_g ? 1.0 : sums.slope();
-  return {g, sums.intercept(g)};
-}
-
-double training_sse(const std::vector<double>& p, std::span<const double> y,
-                    const std::vector<char>& use) {
-  double ss = 0.0;
-  for (std::size_t t = 0; t < p.size(); ++t) {
-    if (use[t]) ss += (y[t] - p[t]) * (y[t] - p[t]);
-  }
-  return ss;
-}
-
 // The noise of one reading from second differences (robust to the few large ones at turning
 // points): 1.4826 median |y[t+1] - 2 y[t] + y[t-1]| / sqrt(6), and at least the rounding error
 // of a quantised sensor (its step / sqrt(12)), where most second differences are 0. A smooth
@@ -116,7 +96,8 @@ SpecimenChange diagnose_specimen_change(std::span<const double> ref_u,
   const Predict none = [&](const std::vector<char>&) { return Fitted{unshifted, 1.0, 0.0, 0.0}; };
   auto through = [&](const std::vector<double>& x, const std::vector<char>& train, bool fixed_g,
                      double d) {
-    const auto [g, c] = affine(x, y, train, fixed_g);
+    const auto [g, c] =
+        diagnosis::masked_line(x, y, train, fixed_g ? std::optional(1.0) : std::nullopt);
     Fitted f{std::vector<double>(n), g, c, d};
     for (std::size_t t = 0; t < n; ++t) f.p[t] = g * x[t] + c;
     return f;
@@ -132,7 +113,7 @@ SpecimenChange diagnose_specimen_change(std::span<const double> ref_u,
     double best_sse = HUGE_VAL;
     for (std::size_t k = 0; k < shifts.size(); ++k) {
       Fitted f = through(shifted[k], train, false, shifts[k]);
-      const double sse = training_sse(f.p, y, train);
+      const double sse = diagnosis::training_sse(y, f.p, train);
       // ties (a flat stretch of the operator, or inputs beyond its grid) go to the smallest |d|
       const bool nearer = std::abs(shifts[k]) < std::abs(best.d);
       if (sse < best_sse * (1.0 - 1e-12) || (sse <= best_sse && nearer)) {
@@ -191,20 +172,25 @@ SpecimenChange diagnose_specimen_change(std::span<const double> ref_u,
 
   std::vector<char> all(n, 1);
   std::mt19937_64 rng(opt.seed);
-  auto add = [&](const std::string& change, const std::string& model, const Predict& predict) {
+  // A candidate scored held out, then (a chain step) its parameters fitted on every reading.
+  auto add = [&](const std::string& change, const std::string& model, const Predict& predict,
+                 bool parameters) {
+    Scored s = heldout(predict);
     SpecimenChangeCandidate c;
     c.change = change;
     c.model = model;
-    const Fitted f = predict(all);
-    c.g = f.g;
-    c.c = f.c;
-    c.d = f.d;
+    if (parameters) {
+      const Fitted f = predict(all);
+      c.g = f.g;
+      c.c = f.c;
+      c.d = f.d;
+    }
     out.candidates.push_back(c);
-    return heldout(predict);
+    return s;
   };
 
   // The chain: each candidate against the last one accepted.
-  const Scored s_none = add("none", "y = Gamma[u], the reference's model unchanged", none);
+  const Scored s_none = add("none", "y = Gamma[u], the reference's model unchanged", none, false);
   out.candidates.back().heldout_rms_pct = s_none.rms;
   out.candidates.back().heldout_max_pct = s_none.max;
   out.candidates.back().heldout_rms_before_pct = s_none.rms;
@@ -241,7 +227,7 @@ SpecimenChange diagnose_specimen_change(std::span<const double> ref_u,
   auto step = [&](const std::string& change, const std::string& model, const Predict& predict,
                   const std::function<std::string(const SpecimenChangeCandidate&)>& what,
                   bool extends_chain) {
-    const Scored s = add(change, model, predict);
+    const Scored s = add(change, model, predict, extends_chain);
     const std::string verdict = judge(s);
     SpecimenChangeCandidate& c = out.candidates.back();
     c.evidence = what(c) + "; " + verdict;
@@ -284,10 +270,7 @@ SpecimenChange diagnose_specimen_change(std::span<const double> ref_u,
         },
         false);
   } catch (const IdentificationError& e) {
-    // (its fit on every reading may have passed and a training fit failed)
-    if (out.candidates.back().change != "shape") out.candidates.emplace_back();
-    SpecimenChangeCandidate& c = out.candidates.back();
-    c = SpecimenChangeCandidate{};
+    SpecimenChangeCandidate& c = out.candidates.emplace_back();
     c.change = "shape";
     c.model = own_model;
     c.evidence =

@@ -27,6 +27,26 @@ double mad(const std::vector<double>& v) {
   return 1.4826 * median(d);
 }
 
+std::pair<double, double> masked_line(std::span<const double> x, std::span<const double> y,
+                                      const std::vector<char>& use,
+                                      std::optional<double> fixed_slope) {
+  LineSums sums;
+  for (std::size_t t = 0; t < x.size(); ++t) {
+    if (use[t]) sums.add(x[t], y[t]);
+  }
+  const double b = fixed_slope ? *fixed_slope : sums.slope();
+  return {b, sums.intercept(b)};
+}
+
+double training_sse(std::span<const double> y, std::span<const double> p,
+                    const std::vector<char>& train) {
+  double ss = 0.0;
+  for (std::size_t t = 0; t < y.size(); ++t) {
+    if (train[t]) ss += (y[t] - p[t]) * (y[t] - p[t]);
+  }
+  return ss;
+}
+
 double rms(std::span<const double> e) {
   double s = 0.0;
   for (double x : e) s += x * x;

@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <random>
 #include <span>
+#include <utility>
 #include <vector>
 
 namespace scpkit::diagnosis {
@@ -44,6 +46,16 @@ struct LineSums {
     return syy - sy * sy / n - (vxx > 0.0 ? vxy * vxy / vxx : 0.0);
   }
 };
+
+/// The least-squares line y = b x + c on the rows where use != 0: (b, c); with fixed_slope, b is
+/// that and only c is fitted.
+std::pair<double, double> masked_line(std::span<const double> x, std::span<const double> y,
+                                      const std::vector<char>& use,
+                                      std::optional<double> fixed_slope = std::nullopt);
+
+/// Squared error of a prediction on the training rows (how extensions choose their parameters).
+double training_sse(std::span<const double> y, std::span<const double> p,
+                    const std::vector<char>& train);
 
 /// Quantisation step of a signal: the smallest gap between distinct values when nearly every
 /// gap is a whole multiple of it; 0 when the signal is not quantised.

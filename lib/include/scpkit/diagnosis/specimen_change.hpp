@@ -16,7 +16,8 @@
 // A candidate is accepted when it gains at least `min_gain_pct` on the held-out error of the one
 // accepted before it, with a sign-flip p-value over the held-out blocks below `alpha`, and that
 // one's held-out error is material: above `floor_factor` times the second test's noise floor
-// (from its second differences, 1.4826 median |y[t+1] - 2 y[t] + y[t-1]| / sqrt(6)). `shape`
+// (from its second differences, 1.4826 median |y[t+1] - 2 y[t] + y[t-1]| / sqrt(6), and at least
+// a quantised sensor's step / sqrt(12)). `shape`
 // when it so beats the last accepted one. The named change is the last accepted; `none` when
 // nothing gains on the unchanged model.
 #include <cstdint>
@@ -27,12 +28,12 @@
 namespace scpkit {
 
 struct SpecimenChangeCandidate {
-  std::string change;            ///< none, offset, range, input_shift, shape
-  std::string model;             ///< the candidate in words
-  double g = 1.0;                ///< range factor (fitted on every reading of the second test)
-  double c = 0.0;                ///< offset, response units
-  double d = 0.0;                ///< input shift, input units
-  double heldout_rms_pct = 0.0;  ///< % of the second test's response range
+  std::string change;                   ///< none, offset, range, input_shift, shape
+  std::string model;                    ///< the candidate in words
+  double g = 1.0;                       ///< range factor (chain steps: fitted on every reading)
+  double c = 0.0;                       ///< offset, response units
+  double d = 0.0;                       ///< input shift, input units
+  double heldout_rms_pct = 0.0;         ///< % of the second test's response range
   double heldout_rms_before_pct = 0.0;  ///< of the candidate it extends (none: its own)
   double heldout_max_pct = 0.0;
   double gain_pct = 0.0;  ///< 100 (1 - heldout / heldout of the candidate it extends)
