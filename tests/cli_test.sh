@@ -282,6 +282,8 @@ check "diagnose --reference with --residuals is a usage error" 2 "not a comparis
 check "diagnose --reference of another input names the reference" 3 "voltage-8loads.csv" -- "$bin" diagnose "$work/moved.csv" --reference "$src/examples/data/voltage-8loads.csv"
 check "diagnose --reference: tests at several loads are not compared" 3 "several constant loads is not built" -- "$bin" diagnose "$src/examples/data/voltage-8loads.csv" --reference "$src/examples/data/voltage-lonely.csv"
 check "diagnose --reference to a missing file names it" 3 "no/such/ref.csv" -- "$bin" diagnose "$work/moved.csv" --reference "$work/no/such/ref.csv"
+grep -v '^# length_mm' "$work/ref.csv" >"$work/ref-mm.csv"
+check "diagnose --reference in mm against strain names the reference" 3 "ref-mm.csv: the reference's response is disp_mm .*give length_mm to both" -- "$bin" diagnose "$work/moved.csv" --reference "$work/ref-mm.csv"
 head -n 14 "$work/ref.csv" >"$work/short-ref.csv"
 check "diagnose --reference too short to identify names the reference" 3 "short-ref.csv.*cannot compare: the reference" -- "$bin" diagnose "$work/moved.csv" --reference "$work/short-ref.csv"
 
