@@ -352,6 +352,10 @@
 #   clean fourth-generator voltage record at four loads in two folds (seed 99305, 0.002 mm
 #   noise), named `load_shape_coupling` on a gain of 3.8 % at p = 0.001 over the cycles of its
 #   two held-out segments: `none`.
+# - Session 98: a lonely stroke named by its term's gain yields to a lag carried across the
+#   load changes as it does where nothing is detected: a third-generator voltage creep at four
+#   loads (seed 130001), the carried element gaining 44.0 % at p = 0.037 against the term's
+#   15.9 %, was named `lonely_stroke` (`creep`).
 # Usage: independent_test.sh SCPKIT_BINARY SOURCE_DIR
 set -u
 bin=$1
@@ -510,6 +514,7 @@ make_cases d d 1 50007 load-outliers
 make_cases b b 1 80050 load-outliers
 make_cases e e 1 50005 load-outliers
 make_cases d d 1 50000 load-creep
+make_cases c c 1 130001 voltage-creep
 pass=0
 fail=0
 check() {  # check HOLDS MESSAGE: counts a pass where HOLDS is 1, else a failure with MESSAGE
@@ -694,5 +699,6 @@ expect_shown_p "$work/e/voltage-load_shape_coupling-98001.csv"
 expect_shown_p "$work/e/voltage-load_shape_coupling-99100.csv"
 expect "$work/d/voltage-none-99203.csv" none
 expect "$work/exact/voltage-none-99106.csv" none
+expect "$work/c/voltage-creep-130001.csv" creep
 echo "$pass passed, $fail failed"
 [ "$fail" -eq 0 ] && [ "$pass" -gt 0 ]
