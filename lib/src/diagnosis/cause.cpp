@@ -145,6 +145,17 @@ Signs read_signs(const Context& ctx) {
   return signs;
 }
 
+/// The first rises' offset across loads (the lonely stroke's model-free signature) explained
+/// better by a lag carried across the load changes (creep_offsets_first_rises): both ways of
+/// naming a cause then name `creep`, with this reason.
+bool carried_lag_offsets_first_rises(const Context& ctx, const Diagnosis& d, const Signs& signs) {
+  return signs.lonely_offset_across_loads && creep_offsets_first_rises(ctx, d);
+}
+constexpr const char* kCarriedLagOffsetsFirstRises =
+    "readings in one memory state within a load segment differ before and after the first rise, "
+    "as a lag carried across the load change makes them do, and the lag gains more on held-out "
+    "data than the running-maximum term";
+
 /// Names `effect` by its signature alone, `why` its extension's gain does not (appended to the
 /// finding's evidence).
 void name_by_signature_alone(Diagnosis& d, const std::string& effect, const std::string& why) {
@@ -542,11 +553,8 @@ void name_by_signature(Context& ctx, Diagnosis& d, const Signs& signs, bool mate
                                    "(nor a trend beside it) can be held out, and readings in one "
                                    "memory state within a load segment differ with the time "
                                    "between them, which no static map of the load makes them do");
-  } else if (signs.lonely_offset_across_loads && creep_offsets_first_rises(ctx, d)) {
-    name_by_signature("creep",
-                      "readings in one memory state within a load segment differ before and "
-                      "after the first rise, as a lag carried across the load change makes them "
-                      "do, and the lag gains more on held-out data than the running-maximum term");
+  } else if (carried_lag_offsets_first_rises(ctx, d, signs)) {
+    name_by_signature("creep", kCarriedLagOffsetsFirstRises);
   } else if (signs.lonely_offset_across_loads) {
     name_by_signature("lonely_stroke",
                       "readings in one memory state within a load segment differ before and "
@@ -652,20 +660,17 @@ void name_cause(Context& ctx, Diagnosis& d) {
     // A lonely stroke named by its term's gain yields, as where nothing is detected (above), to
     // a lag carried across the load changes that explains the first rises' offset better: the
     // offset at the signature's level, then the element's gain at gain_alpha (the
-    // intersection-union name_by_signature uses), not short of alpha because the term was
-    // detected too (measured, session 98: a fresh third-generator voltage creep at four loads,
+    // intersection-union name_by_signature uses). Only where creep is not detected: a detected
+    // creep has already competed with the term by gain in named_by_extension (measured,
+    // session 98: a fresh third-generator voltage creep at four loads,
     // seed 130001, the carried element gaining 44.0 % at p = 0.037 against the term's 15.9 %,
     // named `lonely_stroke`).
     const bool creep_detected =
         std::any_of(d.findings.begin(), d.findings.end(),
                     [](const Finding& f) { return f.effect == "creep" && f.detected; });
-    if (best->effect == "lonely_stroke" && !creep_detected && signs.lonely_offset_across_loads &&
-        creep_offsets_first_rises(ctx, d))
-      name_by_signature_alone(d, "creep",
-                              "readings in one memory state within a load segment differ before "
-                              "and after the first rise, as a lag carried across the load change "
-                              "makes them do, and the lag gains more on held-out data than the "
-                              "running-maximum term");
+    if (best->effect == "lonely_stroke" && !creep_detected &&
+        carried_lag_offsets_first_rises(ctx, d, signs))
+      name_by_signature_alone(d, "creep", kCarriedLagOffsetsFirstRises);
     if (d.cause == "lonely_stroke" || d.cause == "drift") creep_ahead_of(ctx, d);
     return;
   }
